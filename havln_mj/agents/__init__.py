@@ -1,0 +1,1 @@
+"""Learning agents (filled by the agents issue; optional extra)."""

@@ -1,0 +1,1 @@
+"""Gymnasium environments (filled by the gymnasium issue; optional extra)."""

@@ -1,0 +1,1 @@
+"""People in the scene (filled by the humans issue)."""

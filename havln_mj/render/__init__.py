@@ -1,0 +1,1 @@
+"""Offscreen rendering (EGL, OSMesa fallback) and top-down maps."""

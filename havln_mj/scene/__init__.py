@@ -1,0 +1,1 @@
+"""Scans: procedural houses, scan folders, navigation graphs, regions and collision geometry."""

@@ -1,0 +1,1 @@
+"""Procedural houses: ``proc-<seed>`` buildings written as scan folders."""

@@ -1,0 +1,1 @@
+"""Runtime: world building and the simulator."""

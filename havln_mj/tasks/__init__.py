@@ -1,0 +1,1 @@
+"""Task layer: episodes, experts and metrics (filled by the benchmark issue)."""
