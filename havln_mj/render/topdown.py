@@ -1,0 +1,83 @@
+"""Top-down maps: floor plan (regions and a horizontal section of the mesh), graph, paths."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import trimesh  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
+from matplotlib.patches import Polygon  # noqa: E402
+
+from havln_mj.scene.navgraph import NavGraph  # noqa: E402
+from havln_mj.scene.regions import Regions  # noqa: E402
+
+_PATH_COLOURS = ("#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b")
+
+
+def section_segments(mesh: trimesh.Trimesh, z: float) -> np.ndarray:
+    """(S, 2, 2) plan-view segments where the plane at height ``z`` cuts the mesh."""
+    lines = trimesh.intersections.mesh_plane(mesh, plane_normal=[0, 0, 1], plane_origin=[0, 0, z])
+    return np.asarray(lines)[:, :, :2].reshape(-1, 2, 2)
+
+
+def draw_topdown(
+    path: Path,
+    graph: NavGraph,
+    regions: Regions | None,
+    mesh: trimesh.Trimesh | None,
+    paths: Sequence[Sequence[str]] = (),
+    level_floor: float = 0.0,
+    title: str = "",
+) -> None:
+    """Writes a PNG map of one level.
+
+    Args:
+        path: Output PNG path.
+        graph: Navigation graph (nodes and edges are drawn).
+        regions: Regions to fill and label, if known.
+        mesh: Building mesh, cut 1 m above ``level_floor`` to draw walls and furniture.
+        paths: Viewpoint-id paths to highlight (start ○, goal ★).
+        level_floor: Floor height of the level drawn; viewpoints of other levels are skipped.
+        title: Figure title.
+    """
+    fig, ax = plt.subplots(figsize=(9, 9), dpi=110)
+    cmap = plt.get_cmap("tab20")
+    if regions is not None:
+        labels = sorted({r.label for r in regions.regions})
+        for rg in regions.regions:
+            if abs(regions.levels[rg.level].z_floor - level_floor) > 0.5:
+                continue
+            colour = cmap(labels.index(rg.label) % 20)
+            ax.add_patch(Polygon(rg.polygon, closed=True, fc=(*colour[:3], 0.25), ec="none"))
+            cx, cy = rg.polygon.mean(axis=0)
+            ax.text(cx, cy, rg.name, ha="center", va="center", fontsize=7, alpha=0.8)
+    if mesh is not None:
+        ax.add_collection(LineCollection(section_segments(mesh, level_floor + 1.0), colors="0.25", lw=1.0))
+    nodes = [n for n in graph.nodes if abs(graph.floor_z(n) - level_floor) < 0.5]
+    pos = {n: graph.position(n) for n in nodes}
+    edges = [(pos[a][:2], pos[b][:2]) for a, b, _ in graph.edges() if a in pos and b in pos]
+    ax.add_collection(LineCollection(edges, colors="0.6", lw=0.6))
+    xy = np.array([pos[n][:2] for n in nodes]).reshape(-1, 2)
+    ax.scatter(xy[:, 0], xy[:, 1], s=8, c="0.3", zorder=3)
+    for k, p in enumerate(paths):
+        pts = np.array([graph.position(v)[:2] for v in p])
+        c = _PATH_COLOURS[k % len(_PATH_COLOURS)]
+        ax.plot(pts[:, 0], pts[:, 1], "-", c=c, lw=2.2, zorder=4)
+        ax.plot(*pts[0], "o", c=c, ms=9, mfc="white", mew=2, zorder=5)
+        ax.plot(*pts[-1], "*", c=c, ms=14, zorder=5)
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    if title:
+        ax.set_title(title)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
