@@ -3,7 +3,8 @@
 The world is a synthetic house: a floor, a ceiling and a grid of rooms walled by ~300 box
 geoms, lit by a few lights; the camera stands in a room and turns a little every frame.
 fps is 1 / median frame time, where a frame is mj_kinematics + mj_camlight + the render
-calls (robust to other processes sharing the CPUs). ``mujoco.Renderer`` is measured with
+calls; the methods run round-robin so that other processes sharing the CPUs slow them
+alike. ``mujoco.Renderer`` is measured with
 the model's default 4× multisampling and with none (``havln_mj`` defaults to none).
 Prints one JSON object. Run: ``python benchmarks/bench_render_basic.py [--seconds S]``.
 """
@@ -16,6 +17,7 @@ import math
 import os
 import platform
 import time
+from collections.abc import Callable
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -83,68 +85,102 @@ def _turn(model: mujoco.MjModel, data: mujoco.MjData, k: int) -> None:
     mujoco.mj_camlight(model, data)
 
 
-def _fps(step, seconds: float) -> float:
-    """Returns 1 / median frame time: robust to other processes sharing the CPUs."""
-    step(0)  # Warm-up (shader compilation, allocations).
-    times = []
+def _interleaved_fps(steps: dict[str, Callable[[int], None]], seconds: float) -> dict[str, float]:
+    """Returns 1 / median frame time per step, the steps run round-robin.
+
+    Interleaving exposes every method to the same load from other processes, and the median
+    ignores frames they stalled.
+    """
+    for step in steps.values():
+        step(0)  # Warm-up (shader compilation, allocations).
+    times: dict[str, list[float]] = {label: [] for label in steps}
     start = time.perf_counter()
-    while time.perf_counter() - start < seconds or len(times) < 5:
-        t = time.perf_counter()
-        step(len(times) + 1)
-        times.append(time.perf_counter() - t)
-    return round(1.0 / float(np.median(times)), 1)
+    k = 0
+    while time.perf_counter() - start < seconds * len(steps) or k < 5:
+        k += 1
+        for label, step in steps.items():
+            t = time.perf_counter()
+            step(k)
+            times[label].append(time.perf_counter() - t)
+    return {label: round(1.0 / float(np.median(ts)), 1) for label, ts in times.items()}
 
 
-def bench_camera(model, data, width: int, height: int, seconds: float) -> dict[str, float]:
-    """Returns fps of Camera.render for RGB, depth and RGB-D."""
-    out = {}
-    with Camera(model, width=width, height=height) as cam:
-        for label, rgb, depth in (("rgb", True, False), ("depth", False, True), ("rgbd", 1, 1)):
+def camera_steps(model, data, cam: Camera) -> dict[str, Callable[[int], None]]:
+    """Frame functions of havln_mj's Camera: RGB, depth, RGB-D (one pass)."""
 
-            def step(k, rgb=rgb, depth=depth):
-                _turn(model, data, k)
-                cam.render(data, rgb=bool(rgb), depth=bool(depth))
+    def make(rgb: bool, depth: bool) -> Callable[[int], None]:
+        def step(k: int) -> None:
+            _turn(model, data, k)
+            cam.render(data, rgb=rgb, depth=depth)
 
-            out[label] = _fps(step, seconds)
-    return out
+        return step
+
+    return {"rgb": make(True, False), "depth": make(False, True), "rgbd": make(True, True)}
 
 
-def bench_mujoco_renderer(
-    model, data, width: int, height: int, seconds: float, samples: int
-) -> dict[str, float]:
-    """Returns fps of mujoco.Renderer for RGB, depth, and RGB then depth (two passes)."""
-    out = {}
+def renderer_steps(model, data, renderer: mujoco.Renderer) -> dict[str, Callable[[int], None]]:
+    """Frame functions of mujoco.Renderer: RGB, depth, RGB then depth (two passes)."""
+    renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
+    renderer.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
+
+    def rgb_step(k: int) -> None:
+        _turn(model, data, k)
+        renderer.disable_depth_rendering()
+        renderer.update_scene(data, "agent_cam")
+        renderer.render()
+
+    def depth_step(k: int) -> None:
+        _turn(model, data, k)
+        renderer.enable_depth_rendering()
+        renderer.update_scene(data, "agent_cam")
+        renderer.render()
+
+    def rgbd_step(k: int) -> None:
+        _turn(model, data, k)
+        renderer.update_scene(data, "agent_cam")
+        renderer.disable_depth_rendering()
+        renderer.render()
+        renderer.enable_depth_rendering()
+        renderer.render()
+
+    return {"rgb": rgb_step, "depth": depth_step, "rgbd": rgbd_step}
+
+
+def make_renderer(model, width: int, height: int, samples: int) -> mujoco.Renderer:
+    """Returns a mujoco.Renderer whose offscreen buffer has ``samples`` multisamples."""
     old = model.vis.quality.offsamples
     model.vis.quality.offsamples = samples  # Read when the Renderer makes its MjrContext.
-    renderer = mujoco.Renderer(model, height=height, width=width)
-    model.vis.quality.offsamples = old
-    with renderer:
-        renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
-        renderer.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
+    try:
+        return mujoco.Renderer(model, height=height, width=width)
+    finally:
+        model.vis.quality.offsamples = old
 
-        def rgb_step(k):
-            _turn(model, data, k)
-            renderer.disable_depth_rendering()
-            renderer.update_scene(data, "agent_cam")
-            renderer.render()
 
-        def depth_step(k):
-            _turn(model, data, k)
-            renderer.enable_depth_rendering()
-            renderer.update_scene(data, "agent_cam")
-            renderer.render()
-
-        def rgbd_step(k):
-            _turn(model, data, k)
-            renderer.update_scene(data, "agent_cam")
-            renderer.disable_depth_rendering()
-            renderer.render()
-            renderer.enable_depth_rendering()
-            renderer.render()
-
-        out["rgb"] = _fps(rgb_step, seconds)
-        out["depth"] = _fps(depth_step, seconds)
-        out["rgbd"] = _fps(rgbd_step, seconds)
+def bench_resolution(model, data, width: int, height: int, seconds: float) -> dict:
+    """Returns fps of every method at one resolution."""
+    cam = Camera(model, width=width, height=height)
+    plain = make_renderer(model, width, height, samples=0)
+    msaa = make_renderer(model, width, height, samples=4)
+    methods = {
+        "havln_camera_msaa0": camera_steps(model, data, cam),
+        "mujoco_renderer_msaa0": renderer_steps(model, data, plain),
+        "mujoco_renderer_msaa4": renderer_steps(model, data, msaa),
+    }
+    steps = {(method, mode): step for method, fns in methods.items() for mode, step in fns.items()}
+    try:
+        fps = _interleaved_fps(steps, seconds)
+    finally:
+        cam.close()
+        plain.close()
+        msaa.close()
+    out: dict = {method: {} for method in methods}
+    for (method, mode), value in fps.items():
+        out[method][mode] = value
+    ours = out["havln_camera_msaa0"]["rgbd"]
+    out["rgbd_speedup_vs_renderer_msaa0"] = round(ours / out["mujoco_renderer_msaa0"]["rgbd"], 2)
+    out["rgbd_speedup_vs_renderer_default_msaa4"] = round(
+        ours / out["mujoco_renderer_msaa4"]["rgbd"], 2
+    )
     return out
 
 
@@ -161,23 +197,7 @@ def main() -> None:
         "mujoco": mujoco.__version__,
     }
     for width, height in _RESOLUTIONS:
-        key = f"{width}x{height}"
-        result[key] = {
-            "havln_camera_msaa0": bench_camera(model, data, width, height, args.seconds),
-            "mujoco_renderer_msaa0": bench_mujoco_renderer(
-                model, data, width, height, args.seconds, samples=0
-            ),
-            "mujoco_renderer_msaa4": bench_mujoco_renderer(
-                model, data, width, height, args.seconds, samples=4
-            ),
-        }
-        ours = result[key]["havln_camera_msaa0"]["rgbd"]
-        result[key]["rgbd_speedup_vs_renderer_msaa0"] = round(
-            ours / result[key]["mujoco_renderer_msaa0"]["rgbd"], 2
-        )
-        result[key]["rgbd_speedup_vs_renderer_default_msaa4"] = round(
-            ours / result[key]["mujoco_renderer_msaa4"]["rgbd"], 2
-        )
+        result[f"{width}x{height}"] = bench_resolution(model, data, width, height, args.seconds)
     result["gl"] = _gl_info(model)
     result["gl_released_after_close"] = gl.active_session() is None
     print(json.dumps(result, indent=2))

@@ -58,7 +58,9 @@ def draw_topdown(
             cx, cy = rg.polygon.mean(axis=0)
             ax.text(cx, cy, rg.name, ha="center", va="center", fontsize=7, alpha=0.8)
     if mesh is not None:
-        ax.add_collection(LineCollection(section_segments(mesh, level_floor + 1.0), colors="0.25", lw=1.0))
+        ax.add_collection(
+            LineCollection(section_segments(mesh, level_floor + 1.0), colors="0.25", lw=1.0)
+        )
     nodes = [n for n in graph.nodes if abs(graph.floor_z(n) - level_floor) < 0.5]
     pos = {n: graph.position(n) for n in nodes}
     edges = [(pos[a][:2], pos[b][:2]) for a, b, _ in graph.edges() if a in pos and b in pos]

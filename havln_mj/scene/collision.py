@@ -268,7 +268,10 @@ def decompose(
             return _load(path, key)
         except Exception as exc:  # any unreadable entry is recomputed, never raised
             logger.warning("corrupt hull cache entry %s (%s); recomputing", path, exc)
-            path.unlink(missing_ok=True)
+            try:
+                path.unlink(missing_ok=True)
+            except OSError as unlink_exc:  # e.g. a folder in its place; the write will say more
+                logger.warning("could not delete %s: %s", path, unlink_exc)
 
     hulls = _run_coacd(vertices, faces, params)
     try:

@@ -130,7 +130,11 @@ class Regions:
 
         return {
             "levels": [
-                {"index": lv.index, "z_floor": round(lv.z_floor, 4), "z_ceiling": round(lv.z_ceiling, 4)}
+                {
+                    "index": lv.index,
+                    "z_floor": round(lv.z_floor, 4),
+                    "z_ceiling": round(lv.z_ceiling, 4),
+                }
                 for lv in self.levels
             ],
             "regions": [
