@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import trimesh  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
-from matplotlib.patches import Polygon  # noqa: E402
+from matplotlib.patches import Polygon, Rectangle  # noqa: E402
 
 from havln_mj.scene.navgraph import NavGraph  # noqa: E402
 from havln_mj.scene.regions import Regions  # noqa: E402
@@ -40,7 +40,7 @@ def draw_topdown(
     Args:
         path: Output PNG path.
         graph: Navigation graph (nodes and edges are drawn).
-        regions: Regions to fill and label, if known.
+        regions: Regions to fill and label, and objects to draw, if known.
         mesh: Building mesh, cut 1 m above ``level_floor`` to draw walls and furniture.
         paths: Viewpoint-id paths to highlight (start ○, goal ★).
         level_floor: Floor height of the level drawn; viewpoints of other levels are skipped.
@@ -57,6 +57,10 @@ def draw_topdown(
             ax.add_patch(Polygon(rg.polygon, closed=True, fc=(*colour[:3], 0.25), ec="none"))
             cx, cy = rg.polygon.mean(axis=0)
             ax.text(cx, cy, rg.name, ha="center", va="center", fontsize=7, alpha=0.8)
+        for ob in regions.objects:
+            if abs(ob.bbox[2] - level_floor) < 0.5:
+                x0, y0, _, x1, y1, _ = ob.bbox
+                ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fc="0.55", ec="0.35", alpha=0.5, lw=0.5))
     if mesh is not None:
         ax.add_collection(
             LineCollection(section_segments(mesh, level_floor + 1.0), colors="0.25", lw=1.0)

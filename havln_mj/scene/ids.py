@@ -59,7 +59,7 @@ def parse_scene_id(text: str, known: list[str] | None = None) -> SceneId:
     """
     if not isinstance(text, str) or not text:
         raise UnknownSceneError(
-            f"scene id must be a non-empty string, got {text!r}; valid: {VALID_FORMS}"
+            f"scene id must be a non-empty string, got {text!r}; valid forms are {VALID_FORMS}"
         )
     m = _PROC.fullmatch(text)
     if m:

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
+import trimesh
 
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.robot.point_body import add_point_body
@@ -32,12 +33,14 @@ class WorldOptions:
         collision: "auto" (boxes when the scan has them, else CoACD), "boxes", "coacd" or
             "none".
         coacd: CoACD parameters for mesh decomposition.
+        collision_band: Heights (below, above) each level's floor kept for CoACD collision.
         offscreen: (width, height) of the offscreen buffer (renderers enlarge it as needed).
         vfov_deg: Vertical field of view of the agent camera.
     """
 
     collision: str = "auto"
     coacd: CoacdParams = field(default_factory=CoacdParams)
+    collision_band: tuple[float, float] = (-0.3, 2.2)
     offscreen: tuple[int, int] = (640, 480)
     vfov_deg: float = 60.0
 
@@ -98,8 +101,40 @@ def _add_boxes(spec: mujoco.MjSpec, scan: Scan) -> int:
     return len(boxes)
 
 
-def _add_hulls(spec: mujoco.MjSpec, scan: Scan, params: CoacdParams) -> int:
-    hulls = decompose(parts_to_trimesh(scan.mesh_parts), params)
+def _level_floors(scan: Scan) -> list[float]:
+    """Floor heights of the building's levels (from its regions, else its viewpoints)."""
+    if scan.regions is not None and scan.regions.levels:
+        return sorted(lv.z_floor for lv in scan.regions.levels)
+    floors = sorted(scan.graph.floor_z(v) for v in scan.graph.nodes)
+    levels = [floors[0]]
+    for z in floors[1:]:
+        if z - levels[-1] > 1.0:
+            levels.append(z)
+    return levels
+
+
+def collision_bands(scan: Scan, band: tuple[float, float]) -> list[trimesh.Trimesh]:
+    """The mesh cut into one horizontal slab per level, ``band`` metres around its floor.
+
+    Only geometry a ground robot can touch matters for collision; cutting off ceilings also
+    opens each storey, so CoACD does not read a closed building as one solid block.
+    """
+    mesh = parts_to_trimesh(scan.mesh_parts)
+    out = []
+    for z in _level_floors(scan):
+        part = trimesh.intersections.slice_mesh_plane(mesh, [0, 0, 1], [0, 0, z + band[0]])
+        part = trimesh.intersections.slice_mesh_plane(part, [0, 0, -1], [0, 0, z + band[1]])
+        if len(part.faces):
+            out.append(part)
+    return out
+
+
+def _add_hulls(spec: mujoco.MjSpec, scan: Scan, options: WorldOptions) -> int:
+    hulls = [
+        h
+        for part in collision_bands(scan, options.collision_band)
+        for h in decompose(part, options.coacd)
+    ]
     for k, hull in enumerate(hulls):
         name = f"collision/hull_{k}"
         spec.add_mesh(
@@ -159,7 +194,7 @@ def build_world(scan: Scan, options: WorldOptions | None = None) -> World:
     if mode == "boxes":
         n = _add_boxes(spec, scan)
     elif mode == "coacd":
-        n = _add_hulls(spec, scan, options.coacd)
+        n = _add_hulls(spec, scan, options)
     add_point_body(spec, options.vfov_deg)
     model = spec.compile()
     return World(model, scan, mode, n, time.perf_counter() - t0)

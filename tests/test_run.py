@@ -1,0 +1,56 @@
+"""``python -m havln_mj.run`` end to end at small resolution."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import cv2
+
+from havln_mj.run import main
+
+
+def test_cli_writes_video_map_and_summary(tmp_path):
+    out = tmp_path / "run"
+    rc = main(["--scene", "proc-2", "--episodes", "2", "--seed", "4", "--out", str(out),
+               "--width", "96", "--height", "72", "--fps", "4"])
+    assert rc == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["scene"] == "proc-2" and summary["scene_kind"] == "procedural"
+    assert len(summary["episodes"]) == 2
+    for ep in summary["episodes"]:
+        assert ep["path"][0] == ep["start"] and ep["path"][-1] == ep["goal"]
+        assert ep["steps"] == len(ep["path"]) - 1 >= 1
+        assert abs(ep["path_length_m"] - ep["geodesic_m"]) < 1e-3  # shortest paths
+        assert ep["frames"] >= ep["steps"]
+    assert summary["steps"] == sum(ep["steps"] for ep in summary["episodes"])
+    video = cv2.VideoCapture(str(out / "egocentric.mp4"))
+    n, shape = 0, None
+    while True:
+        ok, frame = video.read()
+        if not ok:
+            break
+        n, shape = n + 1, frame.shape
+    assert n == summary["frames"] and shape == (72, 96, 3)
+    topdown = cv2.imread(str(out / "topdown.png"))
+    assert topdown is not None and topdown.std() > 5
+    frame = cv2.imread(str(out / "frame.png"))
+    assert frame.shape == (72, 96, 3) and frame.std() > 1
+
+    # Same seed, same episodes.
+    again = tmp_path / "again"
+    main(["--scene", "proc-2", "--episodes", "2", "--seed", "4", "--out", str(again),
+          "--width", "32", "--height", "24", "--fps", "2"])
+    paths = [e["path"] for e in json.loads((again / "summary.json").read_text())["episodes"]]
+    assert paths == [e["path"] for e in summary["episodes"]]
+
+
+def test_unknown_scene_fails_at_once_with_the_nearest_match(tmp_path):
+    proc = subprocess.run(
+        [sys.executable, "-m", "havln_mj.run", "--scene", "proc_3", "--out", str(tmp_path)],
+        capture_output=True, text=True, timeout=60,
+    )
+    assert proc.returncode == 2
+    assert "proc-<seed>" in proc.stderr and "Did you mean 'proc-3'" in proc.stderr
+    assert not list(tmp_path.iterdir())  # nothing written
