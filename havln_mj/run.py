@@ -70,28 +70,30 @@ def sample_episodes(
 
 
 def walk(body: PointBody, graph: NavGraph, path: Sequence[str], fps: float):
-    """Yields (sim_time, position, heading) samples at ``fps`` of simulated time along a path:
-    turn toward each next viewpoint, then walk to it."""
+    """Moves the body along a path, turning toward each next viewpoint and then walking to it.
+
+    Yields:
+        The simulated time (s) after each sample, at ``fps`` samples per simulated second; the
+        body holds the pose of that moment.
+    """
     t = 0.0
-    yield t, body.position.copy(), body.heading
+    yield t
     for nxt in path[1:]:
-        target = graph.position(nxt)
-        turn = wrap_angle(heading_to(body.position, target) - body.heading)
-        start_h, start_p = body.heading, body.position.copy()
-        legs = [
-            (body.turn_duration(turn), lambda f: (start_p, start_h + f * turn)),
-            (
-                body.move_duration(target),
-                lambda f: (start_p + f * (target - start_p), start_h + turn),
-            ),
-        ]
-        for duration, pose_at in legs:
-            steps = max(1, math.ceil(duration * fps))
-            for k in range(1, steps + 1):
-                p, h = pose_at(k / steps)
-                body.set_pose(p, h)
-                yield t + duration * k / steps, body.position.copy(), body.heading
-            t += duration
+        start, target = body.position.copy(), graph.position(nxt)
+        turn = wrap_angle(heading_to(start, target) - body.heading)
+        h0 = body.heading
+        duration = body.turn_duration(turn)
+        steps = max(1, math.ceil(duration * fps))
+        for k in range(1, steps + 1):
+            body.set_pose(start, h0 + turn * k / steps)
+            yield t + duration * k / steps
+        t += duration
+        duration = body.move_duration(target)
+        steps = max(1, math.ceil(duration * fps))
+        for k in range(1, steps + 1):
+            body.set_pose(start + (target - start) * k / steps, body.heading)
+            yield t + duration * k / steps
+        t += duration
 
 
 def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
@@ -139,8 +141,8 @@ def run(args: argparse.Namespace) -> dict:
         ),
     )
     print(
-        f"world: {world.model.ngeom} geoms, collision {world.collision} ({world.n_collision_geoms} geoms), "
-        f"built in {world.build_seconds:.2f} s",
+        f"world: {world.model.ngeom} geoms, collision {world.collision} "
+        f"({world.n_collision_geoms} geoms), built in {world.build_seconds:.2f} s",
         flush=True,
     )
 
@@ -162,7 +164,7 @@ def run(args: argparse.Namespace) -> dict:
             start = graph.position(ep.start)
             body = PointBody(start, heading=heading_to(start, graph.position(ep.path[1])))
             sim_t, ep_frames = 0.0, 0
-            for sim_t, _, _ in walk(body, graph, ep.path, args.fps):
+            for sim_t in walk(body, graph, ep.path, args.fps):
                 body.write(model, data)
                 t0 = time.perf_counter()
                 rgb = cam.render(data, depth=False).rgb

@@ -14,14 +14,20 @@ from havln_mj.frames import camera_quat, camera_xmat, forward, heading_to, wrap_
 def test_heading_zero_faces_plus_y_and_grows_to_the_right():
     np.testing.assert_allclose(forward(0.0), [0, 1, 0], atol=1e-12)
     np.testing.assert_allclose(forward(math.pi / 2), [1, 0, 0], atol=1e-12)
-    np.testing.assert_allclose(forward(0.0, math.pi / 6), [0, math.cos(math.pi / 6), 0.5], atol=1e-12)
+    np.testing.assert_allclose(
+        forward(0.0, math.pi / 6), [0, math.cos(math.pi / 6), 0.5], atol=1e-12
+    )
     assert heading_to(np.zeros(3), np.array([1.0, 0, 0])) == pytest.approx(math.pi / 2)
     assert heading_to(np.zeros(3), np.array([-1.0, 0, 0])) == pytest.approx(3 * math.pi / 2)
 
 
 @pytest.mark.parametrize(
     ("value", "expected"),
-    [(math.radians(10 - 20), math.radians(350)), (math.radians(350 + 371), math.radians(1)), (2 * math.pi, 0.0)],
+    [
+        (math.radians(10 - 20), math.radians(350)),
+        (math.radians(350 + 371), math.radians(1)),
+        (2 * math.pi, 0.0),
+    ],
 )
 def test_wrap_heading_matches_mattersim(value, expected):
     assert wrap_heading(value) == pytest.approx(expected)

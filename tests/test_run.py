@@ -13,8 +13,24 @@ from havln_mj.run import main
 
 def test_cli_writes_video_map_and_summary(tmp_path):
     out = tmp_path / "run"
-    rc = main(["--scene", "proc-2", "--episodes", "2", "--seed", "4", "--out", str(out),
-               "--width", "96", "--height", "72", "--fps", "4"])
+    rc = main(
+        [
+            "--scene",
+            "proc-2",
+            "--episodes",
+            "2",
+            "--seed",
+            "4",
+            "--out",
+            str(out),
+            "--width",
+            "96",
+            "--height",
+            "72",
+            "--fps",
+            "4",
+        ]
+    )
     assert rc == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["scene"] == "proc-2" and summary["scene_kind"] == "procedural"
@@ -40,8 +56,24 @@ def test_cli_writes_video_map_and_summary(tmp_path):
 
     # Same seed, same episodes.
     again = tmp_path / "again"
-    main(["--scene", "proc-2", "--episodes", "2", "--seed", "4", "--out", str(again),
-          "--width", "32", "--height", "24", "--fps", "2"])
+    main(
+        [
+            "--scene",
+            "proc-2",
+            "--episodes",
+            "2",
+            "--seed",
+            "4",
+            "--out",
+            str(again),
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--fps",
+            "2",
+        ]
+    )
     paths = [e["path"] for e in json.loads((again / "summary.json").read_text())["episodes"]]
     assert paths == [e["path"] for e in summary["episodes"]]
 
@@ -49,7 +81,9 @@ def test_cli_writes_video_map_and_summary(tmp_path):
 def test_unknown_scene_fails_at_once_with_the_nearest_match(tmp_path):
     proc = subprocess.run(
         [sys.executable, "-m", "havln_mj.run", "--scene", "proc_3", "--out", str(tmp_path)],
-        capture_output=True, text=True, timeout=60,
+        capture_output=True,
+        text=True,
+        timeout=60,
     )
     assert proc.returncode == 2
     assert "proc-<seed>" in proc.stderr and "Did you mean 'proc-3'" in proc.stderr

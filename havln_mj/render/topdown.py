@@ -8,14 +8,14 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import trimesh  # noqa: E402
-from matplotlib.collections import LineCollection  # noqa: E402
-from matplotlib.patches import Polygon, Rectangle  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+import trimesh
+from matplotlib.collections import LineCollection
+from matplotlib.patches import Polygon, Rectangle
 
-from havln_mj.scene.navgraph import NavGraph  # noqa: E402
-from havln_mj.scene.regions import Regions  # noqa: E402
+from havln_mj.scene.navgraph import NavGraph
+from havln_mj.scene.regions import Regions
 
 _PATH_COLOURS = ("#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b")
 
@@ -60,7 +60,9 @@ def draw_topdown(
         for ob in regions.objects:
             if abs(ob.bbox[2] - level_floor) < 0.5:
                 x0, y0, _, x1, y1, _ = ob.bbox
-                ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fc="0.55", ec="0.35", alpha=0.5, lw=0.5))
+                ax.add_patch(
+                    Rectangle((x0, y0), x1 - x0, y1 - y0, fc="0.55", ec="0.35", alpha=0.5, lw=0.5)
+                )
     if mesh is not None:
         ax.add_collection(
             LineCollection(section_segments(mesh, level_floor + 1.0), colors="0.25", lw=1.0)

@@ -59,7 +59,8 @@ class Scan:
         source = {"procedural": "procedural house", "matterport": "Matterport3D scan"}.get(
             self.kind, "scan folder"
         )
-        return f"{self.scene_id} ({source}; {self.graph.num_nodes} viewpoints, {self.graph.num_edges} edges)"
+        g = self.graph
+        return f"{self.scene_id} ({source}; {g.num_nodes} viewpoints, {g.num_edges} edges)"
 
 
 def read_scan_folder(folder: Path, scene_id: str | None = None) -> Scan:

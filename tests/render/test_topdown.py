@@ -21,6 +21,7 @@ def test_map_has_rooms_walls_and_the_path(tmp_path):
     draw_topdown(with_path, scan.graph, scan.regions, mesh, [path], title="t")
     img_plain, img_path = cv2.imread(str(plain)), cv2.imread(str(with_path))
     assert img_plain.shape == img_path.shape and img_plain.shape[2] == 3
+
     # The highlighted path adds saturated red pixels the plain map lacks.
     def red(img):
         b, g, r = (img[..., k].astype(int) for k in range(3))

@@ -40,7 +40,15 @@ def test_same_seed_gives_identical_bytes_and_model(tmp_path):
         assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
     ma = build_world(read_scan_folder(tmp_path / "a")).model
     mb = build_world(read_scan_folder(tmp_path / "b")).model
-    for field in ("geom_type", "geom_size", "geom_pos", "geom_rgba", "geom_group", "mesh_vert", "mesh_face"):
+    for field in (
+        "geom_type",
+        "geom_size",
+        "geom_pos",
+        "geom_rgba",
+        "geom_group",
+        "mesh_vert",
+        "mesh_face",
+    ):
         np.testing.assert_array_equal(getattr(ma, field), getattr(mb, field), err_msg=field)
 
 
@@ -143,4 +151,6 @@ def test_every_seed_renders(scans, worlds, seed):
         frame = cam.render(data)
     assert frame.rgb.shape == (48, 64, 3) and frame.rgb.dtype == np.uint8
     assert frame.rgb.std() > 1.0  # not a blank image
-    assert np.all(frame.depth > 0.0) and np.all(frame.depth < 30.0)  # closed house: walls everywhere
+    assert np.all(frame.depth > 0.0) and np.all(
+        frame.depth < 30.0
+    )  # closed house: walls everywhere

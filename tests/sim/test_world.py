@@ -17,7 +17,9 @@ from havln_mj.sim import groups
 from havln_mj.sim.world import WorldOptions, build_world
 
 # Small enough for CI: a ~15 m² house and a coarse remesh.
-FAST_COACD = CoacdParams(threshold=0.08, preprocess_resolution=30, mcts_iterations=40, mcts_max_depth=2)
+FAST_COACD = CoacdParams(
+    threshold=0.08, preprocess_resolution=30, mcts_iterations=40, mcts_max_depth=2
+)
 
 
 def _group_mask(*gs: int) -> np.ndarray:

@@ -24,6 +24,15 @@ def _subtract(lo: float, hi: float, holes: list[tuple[float, float]]) -> list[tu
     return [(a, b) for a, b in out if b - a > 1e-6]
 
 
+def _wall_box(
+    vertical: bool, n0: float, n1: float, a: float, b: float, z0: float, z1: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """A wall box spanning [n0, n1] across the wall line and [a, b] along it."""
+    if vertical:
+        return np.array([n0, a, z0]), np.array([n1, b, z1])
+    return np.array([a, n0, z0]), np.array([b, n1, z1])
+
+
 def _room_walls(room: Room, plan: FloorPlan, recipe: Recipe) -> list[tuple[np.ndarray, np.ndarray]]:
     """Wall and lintel boxes lining the inside of one room (each room paints its own side)."""
     t_in, t_out = recipe["interior_wall_half"], recipe["exterior_wall"]
@@ -53,15 +62,10 @@ def _room_walls(room: Room, plan: FloorPlan, recipe: Recipe) -> list[tuple[np.nd
         t = thick[side]
         n0, n1 = (coord, coord + t) if side in ("south", "west") else (coord - t, coord)
 
-        def box(a: float, b: float, z0: float, z1: float) -> tuple[np.ndarray, np.ndarray]:
-            if vertical:
-                return np.array([n0, a, z0]), np.array([n1, b, z1])
-            return np.array([a, n0, z0]), np.array([b, n1, z1])
-
         for a, b in _subtract(lo, hi, [(h[0], h[1]) for h in holes]):
-            boxes.append(box(a, b, 0.0, height))
+            boxes.append(_wall_box(vertical, n0, n1, a, b, 0.0, height))
         for a, b, door_h in holes:
-            boxes.append(box(max(a, lo), min(b, hi), door_h, height))
+            boxes.append(_wall_box(vertical, n0, n1, max(a, lo), min(b, hi), door_h, height))
     return boxes
 
 

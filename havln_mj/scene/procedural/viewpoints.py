@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.sparse import csr_matrix
-from scipy.spatial import cKDTree
 from scipy.sparse.csgraph import connected_components, dijkstra
+from scipy.spatial import cKDTree
 
 from havln_mj.scene.boxes import BoxSet, body_sweep_blocked, segments_hit_boxes
 from havln_mj.scene.procedural.furnish import Item
@@ -61,8 +61,10 @@ def _far_from(p: np.ndarray, points: list[np.ndarray], spacing: float) -> bool:
 def _room_lattice(
     recipe: Recipe, inner: np.ndarray, feet: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Lattice points on a room's free floor and their clearance (metres to the nearest wall
-    or furniture footprint)."""
+    """Lattice points on a room's free floor, and their clearance.
+
+    Clearance is the distance in metres to the nearest wall or furniture footprint.
+    """
     lo, hi = inner[:2] + recipe["wall_clearance"], inner[2:] - recipe["wall_clearance"]
     if np.any(hi < lo):
         return np.zeros((0, 2)), np.zeros(0)
@@ -194,8 +196,11 @@ def _candidates(
     items: list[Item],
     boxes: BoxSet,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """2-D viewpoint positions and rooms: door pairs, a Poisson-disk sample of the free
-    floor, and bridge points wherever the sample leaves reachable floor disconnected."""
+    """2-D viewpoint positions and their rooms.
+
+    Door pairs come first, then a Poisson-disk sample of the free floor, then bridge points
+    wherever the sample leaves reachable floor disconnected.
+    """
     feet = _footprints(items)
     door_pts, door_rooms = _door_points(recipe, plan, feet)
     lattice, lattice_rooms, clearance = _free_lattice(recipe, plan, inners, feet)
