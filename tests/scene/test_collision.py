@@ -183,7 +183,8 @@ def test_key_depends_on_mesh_and_params() -> None:
     assert hull_cache_key(mesh, CoacdParams(**{**FAST.__dict__})) == key
 
     for changed in (
-        CoacdParams(**{**FAST.__dict__, "threshold": 0.1}),
+        CoacdParams(**{**FAST.__dict__, "threshold": 0.2}),
+        CoacdParams(**{**FAST.__dict__, "real_metric": False}),
         CoacdParams(**{**FAST.__dict__, "seed": 1}),
         CoacdParams(**{**FAST.__dict__, "preprocess_resolution": 21}),
         CoacdParams(),
@@ -342,7 +343,7 @@ def test_flat_mesh_raises_corrupt_mesh_error() -> None:
     [
         ("threshold", -0.1),
         ("threshold", 0.0),
-        ("threshold", 2.5),
+        ("threshold", float("inf")),
         ("threshold", float("nan")),
         ("max_convex_hull", 0),
         ("max_convex_hull", -2),
@@ -367,8 +368,21 @@ def test_bad_params_name_field_and_value(field: str, value: object) -> None:
     assert field in message and repr(value) in message and "valid" in message
 
 
-def test_threshold_in_metres_may_exceed_one() -> None:
-    assert CoacdParams(threshold=2.0, real_metric=True).threshold == 2.0
+def test_threshold_range_depends_on_units() -> None:
+    assert CoacdParams(threshold=2.0, real_metric=True).threshold == 2.0  # metres
+    with pytest.raises(InvalidArgumentError, match=r"threshold=2\.0.*\(0, 1\]"):
+        CoacdParams(threshold=2.0, real_metric=False)  # normalised units
+
+
+def test_parameters_the_installed_coacd_lacks_are_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    def old_run_coacd(mesh, threshold=0.05, preprocess_resolution=50, seed=0):  # no real_metric
+        raise AssertionError("not called")
+
+    monkeypatch.setattr(collision.coacd, "run_coacd", old_run_coacd)
+    with pytest.raises(InvalidArgumentError, match=r"real_metric=True.*upgrade coacd"):
+        CoacdParams().coacd_kwargs()
+    kwargs = CoacdParams(real_metric=False, threshold=0.05).coacd_kwargs()
+    assert kwargs == {"threshold": 0.05, "preprocess_resolution": 50, "seed": 0}
 
 
 # --- MuJoCo ----------------------------------------------------------------------------------
