@@ -11,27 +11,14 @@ import cv2
 from havln_mj.run import main
 
 
+def _run(out, width, height, fps):
+    args = f"--scene proc-2 --episodes 2 --seed 4 --width {width} --height {height} --fps {fps}"
+    return main([*args.split(), "--out", str(out)])
+
+
 def test_cli_writes_video_map_and_summary(tmp_path):
     out = tmp_path / "run"
-    rc = main(
-        [
-            "--scene",
-            "proc-2",
-            "--episodes",
-            "2",
-            "--seed",
-            "4",
-            "--out",
-            str(out),
-            "--width",
-            "96",
-            "--height",
-            "72",
-            "--fps",
-            "4",
-        ]
-    )
-    assert rc == 0
+    assert _run(out, 96, 72, 4) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["scene"] == "proc-2" and summary["scene_kind"] == "procedural"
     assert len(summary["episodes"]) == 2
@@ -56,24 +43,7 @@ def test_cli_writes_video_map_and_summary(tmp_path):
 
     # Same seed, same episodes.
     again = tmp_path / "again"
-    main(
-        [
-            "--scene",
-            "proc-2",
-            "--episodes",
-            "2",
-            "--seed",
-            "4",
-            "--out",
-            str(again),
-            "--width",
-            "32",
-            "--height",
-            "24",
-            "--fps",
-            "2",
-        ]
-    )
+    assert _run(again, 32, 24, 2) == 0
     paths = [e["path"] for e in json.loads((again / "summary.json").read_text())["episodes"]]
     assert paths == [e["path"] for e in summary["episodes"]]
 

@@ -66,19 +66,27 @@ def _safe_name(text: str) -> str:
     return "".join(c if c.isalnum() or c in "_-." else "_" for c in text)
 
 
+def _add_mesh_geom(
+    spec: mujoco.MjSpec, name: str, vertices: np.ndarray, faces: np.ndarray, **geom: object
+) -> None:
+    """Adds a mesh asset and a world geom showing it, both called ``name``."""
+    spec.add_mesh(
+        name=name,
+        uservert=vertices.astype(np.float32).ravel(),
+        userface=faces.ravel(),
+        inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL,  # open meshes have no volume
+    )
+    spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name, **geom)
+
+
 def _add_visual(spec: mujoco.MjSpec, parts: list[MeshPart]) -> None:
     for k, part in enumerate(parts):
         name = f"visual/{k}_{_safe_name(part.name)}"
-        spec.add_mesh(
-            name=name,
-            uservert=part.vertices.astype(np.float32).ravel(),
-            userface=part.faces.ravel(),
-            inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL,
-        )
-        spec.worldbody.add_geom(
-            name=name,
-            type=mujoco.mjtGeom.mjGEOM_MESH,
-            meshname=name,
+        _add_mesh_geom(
+            spec,
+            name,
+            part.vertices,
+            part.faces,
             rgba=part.rgba,
             group=groups.VISUAL,
             contype=0,
@@ -136,16 +144,11 @@ def _add_hulls(spec: mujoco.MjSpec, scan: Scan, options: WorldOptions) -> int:
         for h in decompose(part, options.coacd)
     ]
     for k, hull in enumerate(hulls):
-        name = f"collision/hull_{k}"
-        spec.add_mesh(
-            name=name,
-            uservert=hull.vertices.astype(np.float32).ravel(),
-            userface=hull.faces.ravel(),
-        )
-        spec.worldbody.add_geom(
-            name=name,
-            type=mujoco.mjtGeom.mjGEOM_MESH,
-            meshname=name,
+        _add_mesh_geom(
+            spec,
+            f"collision/hull_{k}",
+            hull.vertices,
+            hull.faces,
             group=groups.COLLISION,
             rgba=(0.3, 0.3, 0.8, 0.3),
         )
