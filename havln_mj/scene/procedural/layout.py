@@ -203,7 +203,7 @@ def _assign_kinds(
     kinds: list[str | None] = [r[4] for r in rects]
     free = [i for i, k in enumerate(kinds) if k is None]
 
-    def take(score: list[float]) -> None:
+    def take(score: list[float]) -> int:
         best = min(free, key=lambda i: (score[i], i))
         free.remove(best)
         return best

@@ -5,7 +5,6 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import dataclass
-from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +34,6 @@ class Recipe:
         return self["furniture"][name]
 
 
-@cache
 def _load(path: Path) -> Recipe:
     data = path.read_bytes()
     try:
@@ -51,5 +49,5 @@ def _load(path: Path) -> Recipe:
 
 
 def load_recipe(path: Path | None = None) -> Recipe:
-    """Loads the built-in recipe (or ``path``). Parsed once per file and never mutated."""
+    """Loads the built-in recipe (or ``path``)."""
     return _load((path or asset_path("scenes", "procedural.json")).resolve())
