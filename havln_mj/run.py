@@ -1,7 +1,8 @@
 """``python -m havln_mj.run``: build a scene and walk shortest paths through it on camera.
 
-Writes to ``--out``: ``egocentric.mp4`` (the agent's view), ``frame.png`` (one frame),
-``topdown.png`` (floor plan, rooms, graph, the walked paths) and ``summary.json``.
+Writes to ``--out``: ``egocentric.mp4`` (the agent's view), ``frame.png`` (the most detailed
+view of the first episode), ``topdown.png`` (floor plan, rooms, graph, the walked paths) and
+``summary.json``.
 """
 
 from __future__ import annotations
@@ -157,6 +158,7 @@ def run(args: argparse.Namespace) -> dict:
     if not writer.isOpened():
         raise HavlnError(f"cannot open an MP4 writer for {video_path}")
     records, render_s, frames = [], 0.0, 0
+    best_detail, best_frame = -1.0, None
     with Camera(
         model, CAMERA, args.width, args.height, args.vfov, geom_groups=groups.CAMERA_GROUPS
     ) as cam:
@@ -181,8 +183,9 @@ def run(args: argparse.Namespace) -> dict:
                     cv2.LINE_AA,
                 )
                 writer.write(bgr)
-                if k == 0 and ep_frames == 0:
-                    cv2.imwrite(str(frame_path), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
+                if k == 0 and rgb.std() > best_detail:  # keep the most detailed first-episode view
+                    best_detail, best_frame = float(rgb.std()), rgb
+
                 ep_frames += 1
             frames += ep_frames
             records.append(
@@ -198,6 +201,7 @@ def run(args: argparse.Namespace) -> dict:
                 }
             )
     writer.release()
+    cv2.imwrite(str(frame_path), cv2.cvtColor(best_frame, cv2.COLOR_RGB2BGR))
     map_path = out / "topdown.png"
     level = graph.floor_z(episodes[0].start)
     draw_topdown(

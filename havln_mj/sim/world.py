@@ -3,7 +3,7 @@
 Visual geometry is the scan's mesh, one mesh geom per material (group ``VISUAL``, no
 contacts). Collision geometry (group ``COLLISION``, hidden from cameras) is the exact boxes
 of a procedural house, or the CoACD convex decomposition of the mesh for scans without boxes.
-Lighting is a soft headlight plus one directional light, shadows off.
+Lighting is a soft headlight plus two directional lights, shadows off.
 """
 
 from __future__ import annotations
@@ -173,18 +173,24 @@ def build_world(scan: Scan, options: WorldOptions | None = None) -> World:
     spec.option.gravity = (0.0, 0.0, -9.81)
     spec.visual.global_.offwidth = int(options.offscreen[0])
     spec.visual.global_.offheight = int(options.offscreen[1])
-    spec.visual.headlight.ambient = (0.35, 0.35, 0.35)
-    spec.visual.headlight.diffuse = (0.35, 0.35, 0.35)
+    spec.visual.headlight.ambient = (0.4, 0.4, 0.4)
+    spec.visual.headlight.diffuse = (0.3, 0.3, 0.3)
     spec.visual.headlight.specular = (0.0, 0.0, 0.0)
     spec.visual.quality.shadowsize = 0
-    spec.worldbody.add_light(
-        name="sun",
-        type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
-        dir=(0.3, 0.2, -1.0),
-        diffuse=(0.55, 0.55, 0.52),
-        specular=(0.0, 0.0, 0.0),
-        castshadow=False,
-    )
+    # A key light from above and a weaker fill from below, so floors, walls and ceilings all
+    # read clearly without shadows.
+    for name, direction, level in (
+        ("sun", (0.3, 0.2, -1.0), 0.5),
+        ("fill", (-0.2, -0.3, 1.0), 0.25),
+    ):
+        spec.worldbody.add_light(
+            name=name,
+            type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
+            dir=direction,
+            diffuse=(level, level, level * 0.95),
+            specular=(0.0, 0.0, 0.0),
+            castshadow=False,
+        )
     _add_visual(spec, scan.mesh_parts)
     mode = options.collision
     if mode == "auto":

@@ -72,7 +72,7 @@ def _local_parts(shape: str, w: float, d: float, h: float, spec: dict) -> list[t
         return parts
     if shape == "sofa":
         return [
-            (-hw, -hd, 0.0, hw, hd - 0.2, sh, tuple(c)),
+            (-hw + 0.15, -hd, 0.0, hw - 0.15, hd - 0.2, sh, tuple(c)),  # seat between the arms
             (-hw, hd - 0.2, 0.0, hw, hd, h, dark),
             (-hw, -hd, 0.0, -hw + 0.15, hd - 0.2, 0.62, dark),
             (hw - 0.15, -hd, 0.0, hw, hd - 0.2, 0.62, dark),
