@@ -188,6 +188,55 @@ def _edges(
     return i, j, np.linalg.norm(floor[i, :2] - floor[j, :2], axis=1)
 
 
+def _bridge(
+    pts: np.ndarray,
+    labels: np.ndarray,
+    dense: np.ndarray,
+    dense_graph: csr_matrix,
+    boxes: BoxSet,
+    recipe: Recipe,
+) -> list[np.ndarray]:
+    """New viewpoints joining the largest component to the nearest other one.
+
+    The route follows the dense graph; the string is pulled tight, so each new point is the
+    farthest route point still in clear reach of the previous one and consecutive points are
+    always joined. Returns nothing when no other component is reachable.
+    """
+    max_len = recipe["max_edge_length"]
+    radius, z_range = recipe["body_radius"], tuple(recipe["body_z"])
+    near = np.argmin(np.linalg.norm(dense[None] - pts[:, None], axis=2), axis=1)
+    main = labels == np.bincount(labels).argmax()
+    dist, pred, src = dijkstra(
+        dense_graph,
+        directed=False,
+        indices=np.unique(near[main]),
+        min_only=True,
+        return_predecessors=True,
+    )
+    others = np.flatnonzero(~main)
+    others = others[np.isfinite(dist[near[others]])]
+    if len(others) == 0:
+        return []
+    start = int(others[np.argmin(dist[near[others]])])
+    node, route = int(near[start]), [pts[start]]
+    while node >= 0:
+        route.append(dense[node])
+        node = int(pred[node])
+    route.append(pts[np.flatnonzero(main & (near == src[near[start]]))[0]])
+    route = np.array(route)
+    out, anchor = [], 0
+    while anchor < len(route) - 1:
+        ahead = np.arange(anchor + 1, len(route))
+        ahead = ahead[np.linalg.norm(route[ahead] - route[anchor], axis=1) <= 0.9 * max_len]
+        a3 = np.column_stack([np.repeat(route[anchor][None], len(ahead), 0), np.zeros(len(ahead))])
+        b3 = np.column_stack([route[ahead], np.zeros(len(ahead))])
+        clear = ahead[~body_sweep_blocked(a3, b3, boxes, radius, z_range)]
+        anchor = int(clear.max()) if len(clear) else anchor + 1
+        if anchor < len(route) - 1:
+            out.append(route[anchor])
+    return out
+
+
 def _candidates(
     rng: np.random.Generator,
     recipe: Recipe,
@@ -217,56 +266,20 @@ def _candidates(
     dense = np.vstack([np.array(door_pts).reshape(-1, 2), lattice])
     dense_rooms = np.concatenate([door_rooms, lattice_rooms]).astype(int)
     dense_graph = _dense_graph(recipe, np.array(door_pts), lattice, boxes)
-    max_len = recipe["max_edge_length"]
-    radius, z_range = recipe["body_radius"], tuple(recipe["body_z"])
     for _ in range(len(plan.rooms) * 4):
         floor = np.column_stack([np.array(chosen), np.zeros(len(chosen))])
-        a, b, _ = _edges(floor, boxes, recipe, max_len)
+        a, b, _ = _edges(floor, boxes, recipe, recipe["max_edge_length"])
         n_comp, labels = connected_components(
             csr_matrix((np.ones(len(a)), (a, b)), shape=(len(chosen),) * 2), directed=False
         )
         if n_comp == 1:
             break
-        # Bridge the largest component to the nearest other one along a dense-graph path,
-        # pulling the string: each new viewpoint is the farthest path point still in clear
-        # sight of the previous one, so consecutive bridge points are always joined.
-        pts = np.array(chosen)
-        near = np.argmin(np.linalg.norm(dense[None] - pts[:, None], axis=2), axis=1)
-        main = labels == np.bincount(labels).argmax()
-        dist, pred, src = dijkstra(
-            dense_graph,
-            directed=False,
-            indices=np.unique(near[main]),
-            min_only=True,
-            return_predecessors=True,
-        )
-        others = np.flatnonzero(~main)
-        others = others[np.isfinite(dist[near[others]])]
-        if len(others) == 0:
+        bridge = _bridge(np.array(chosen), labels, dense, dense_graph, boxes, recipe)
+        if not bridge:
             break
-        start = int(others[np.argmin(dist[near[others]])])
-        node, route = int(near[start]), [pts[start]]
-        while node >= 0:
-            route.append(dense[node])
-            node = int(pred[node])
-        goal = int(np.flatnonzero(main & (near == src[near[start]]))[0])
-        route.append(pts[goal])
-        route = np.array(route)
-        anchor = 0
-        while anchor < len(route) - 1:
-            ahead = np.arange(anchor + 1, len(route))
-            ahead = ahead[np.linalg.norm(route[ahead] - route[anchor], axis=1) <= 0.9 * max_len]
-            a3 = np.column_stack(
-                [np.repeat(route[anchor][None], len(ahead), 0), np.zeros(len(ahead))]
-            )
-            b3 = np.column_stack([route[ahead], np.zeros(len(ahead))])
-            clear = ahead[~body_sweep_blocked(a3, b3, boxes, radius, z_range)]
-            anchor = int(clear.max()) if len(clear) else anchor + 1
-            if anchor < len(route) - 1:
-                chosen.append(route[anchor])
-                rooms.append(
-                    int(dense_rooms[np.argmin(np.linalg.norm(dense - route[anchor], axis=1))])
-                )
+        for p in bridge:
+            chosen.append(p)
+            rooms.append(int(dense_rooms[np.argmin(np.linalg.norm(dense - p, axis=1))]))
     return np.array(chosen), np.array(rooms)
 
 
