@@ -35,6 +35,10 @@ class CorruptMeshError(MalformedDataError):
     """A mesh file cannot be read or holds no usable triangles."""
 
 
+class FrameMismatchError(MalformedDataError):
+    """A user's files disagree on the coordinate frame (viewpoints do not stand on the mesh)."""
+
+
 class MissingDataError(HavlnError, FileNotFoundError):
     """A file the user must supply (or a built scan) is not where it was looked for."""
 
