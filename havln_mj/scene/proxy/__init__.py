@@ -1,0 +1,1 @@
+"""Graph proxies: buildings synthesised from a real navigation graph when its mesh is absent."""

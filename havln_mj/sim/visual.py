@@ -1,0 +1,150 @@
+"""Visual mesh parts as MuJoCo assets and geoms, with their textures.
+
+Each part becomes one mesh asset and one world geom named ``visual/<k>_<part name>``:
+no contacts, in the visual geom group. An untextured part keeps its ``rgba``. A textured part
+gets a 2-D texture holding its image, a material using it, and the mesh's per-vertex texture
+coordinates.
+
+Texture orientation: :class:`~havln_mj.scene.mesh.MeshPart` stores images top row first and
+UVs in the OBJ convention (``v = 0`` at the image's bottom). MuJoCo puts the first row of a
+texture's data at ``v = 0``, so ``v`` is flipped (``v' = 1 - v``) when the coordinates are
+handed to MuJoCo; the image bytes are passed unchanged (no copy of large images is flipped).
+
+MuJoCo rejects meshes with fewer than 4 vertices or no surface area: a part with 3 vertices
+gets a repeated, unused vertex; a part with no triangles or zero area is skipped (logged).
+"""
+
+from __future__ import annotations
+
+import logging
+
+import mujoco
+import numpy as np
+
+from havln_mj.errors import InvalidArgumentError
+from havln_mj.scene.mesh import MeshPart
+from havln_mj.sim import groups
+
+log = logging.getLogger(__name__)
+
+_MIN_AREA = 1e-12  # m²; MuJoCo refuses meshes whose surface area is below its tolerance
+
+
+def safe_name(text: str) -> str:
+    """``text`` with every character other than letters, digits and ``_-.`` replaced by ``_``."""
+    return "".join(c if c.isalnum() or c in "_-." else "_" for c in text)
+
+
+def _add_texture(spec: mujoco.MjSpec, name: str, image: np.ndarray) -> None:
+    """Adds a 2-D RGB texture called ``name`` holding ``image`` (H×W×3 uint8, top row first)."""
+    if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
+        raise InvalidArgumentError(
+            f"texture {name!r} must be an H×W×3 uint8 array, got {image.dtype} {image.shape}"
+        )
+    height, width = image.shape[:2]
+    texture = spec.add_texture(
+        name=name, type=mujoco.mjtTexture.mjTEXTURE_2D, width=width, height=height, nchannel=3
+    )
+    # The attribute takes bytes (the constructor keyword wants a list of ints: far slower).
+    texture.data = np.ascontiguousarray(image).tobytes()
+
+
+def _check_part(part: MeshPart, vertices: np.ndarray, faces: np.ndarray) -> None:
+    """Raises InvalidArgumentError when the part's arrays do not fit together."""
+    where = f"visual part {part.name!r}"
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise InvalidArgumentError(
+            f"{where}: vertices have shape {vertices.shape}, expected (V, 3)"
+        )
+    if faces.ndim != 2 or faces.shape[1] != 3:
+        raise InvalidArgumentError(f"{where}: faces have shape {faces.shape}, expected (F, 3)")
+    if len(faces) and (faces.min() < 0 or faces.max() >= len(vertices)):
+        raise InvalidArgumentError(
+            f"{where}: face indices span [{faces.min()}, {faces.max()}], "
+            f"valid [0, {len(vertices) - 1}]"
+        )
+    if part.uv is not None and part.uv.shape != (len(vertices), 2):
+        raise InvalidArgumentError(
+            f"{where}: uv has shape {part.uv.shape}, expected ({len(vertices)}, 2)"
+        )
+
+
+def _area(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """Total triangle area (0 for no faces)."""
+    if len(faces) == 0:
+        return 0.0
+    tri = vertices[faces].astype(np.float64)
+    return 0.5 * float(
+        np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1).sum()
+    )
+
+
+def _mujoco_texcoords(uv: np.ndarray) -> np.ndarray:
+    """OBJ-convention UVs (V, 2) as MuJoCo's flat float32 texcoords (``v`` flipped)."""
+    out = np.empty((len(uv), 2), dtype=np.float32)
+    out[:, 0] = uv[:, 0]
+    np.subtract(1.0, uv[:, 1], out=out[:, 1])
+    return out.ravel()
+
+
+def add_visual_parts(
+    spec: mujoco.MjSpec,
+    parts: list[MeshPart],
+    *,
+    group: int = groups.VISUAL,
+    emission: float = 0.0,
+) -> int:
+    """Adds mesh parts to the world body as non-colliding visual geoms.
+
+    Args:
+        spec: The model being built.
+        parts: The mesh parts (see :func:`havln_mj.scene.mesh.load_mesh_parts`).
+        group: Geom group of the new geoms.
+        emission: Emission of textured materials (0 lets the scene's lights alone shade
+            them; scan textures already hold baked lighting, so a higher value with dimmer
+            lights looks closer to the photographs).
+
+    Returns:
+        The number of geoms added: one per part, less the parts skipped for having no
+        surface (their index ``k`` is left unused, so names stay tied to ``parts``).
+
+    Raises:
+        InvalidArgumentError: A part's vertices, faces, UVs or texture do not fit together.
+    """
+    textures: dict[int, str] = {}  # id(image) -> texture name; shared images upload once
+    added = 0
+    for k, part in enumerate(parts):
+        name = f"visual/{k}_{safe_name(part.name)}"
+        vertices = np.asarray(part.vertices, dtype=np.float32)
+        faces = np.asarray(part.faces, dtype=np.int32)
+        _check_part(part, vertices, faces)
+        if _area(vertices, faces) < _MIN_AREA:
+            log.warning("visual part %d (%r) has no surface; skipped", k, part.name)
+            continue
+        uv = part.uv
+        if len(vertices) < 4:  # MuJoCo's minimum; the extra vertex is used by no face
+            vertices = np.concatenate([vertices, vertices[:1]])
+            uv = None if uv is None else np.concatenate([uv, uv[:1]])
+        mesh = spec.add_mesh(
+            name=name,
+            uservert=vertices.ravel(),
+            userface=faces.ravel(),
+            inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL,  # open meshes have no volume
+        )
+        geom = {"group": group, "contype": 0, "conaffinity": 0}
+        if uv is not None and part.texture is not None:
+            mesh.usertexcoord = _mujoco_texcoords(uv)
+            texture = textures.get(id(part.texture))
+            if texture is None:
+                texture = textures[id(part.texture)] = f"visual/tex{len(textures)}"
+                _add_texture(spec, texture, part.texture)
+            material = spec.add_material(
+                name=name, rgba=(1.0, 1.0, 1.0, 1.0), emission=emission, specular=0.0
+            )
+            material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = texture
+            geom["material"] = name
+        else:
+            geom["rgba"] = part.rgba
+        spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name, **geom)
+        added += 1
+    return added
