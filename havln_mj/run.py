@@ -115,6 +115,18 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--vfov", type=float, default=60.0, help="vertical field of view, degrees")
     p.add_argument("--fps", type=float, default=10.0, help="video frames per simulated second")
     p.add_argument("--collision", choices=COLLISION_MODES, default="auto")
+    p.add_argument(
+        "--mp3d-dir",
+        type=Path,
+        default=None,
+        help="Matterport3D data root (raw or habitat layout; default $HAVLN_MP3D_DIR)",
+    )
+    p.add_argument(
+        "--connectivity-dir",
+        type=Path,
+        default=None,
+        help="folder of <scan>_connectivity.json graphs (default $HAVLN_CONNECTIVITY_DIR)",
+    )
     args = p.parse_args(argv)
     if args.episodes < 1:
         p.error(f"--episodes must be at least 1, got {args.episodes}")
@@ -132,7 +144,7 @@ def run(args: argparse.Namespace) -> dict:
     out.mkdir(parents=True, exist_ok=True)
 
     t0 = time.perf_counter()
-    scan = load_scan(scene)
+    scan = load_scan(scene, mp3d_dir=args.mp3d_dir, connectivity_dir=args.connectivity_dir)
     t_scan = time.perf_counter() - t0
     print(f"havln_mj {__version__}: {scan.description}", flush=True)
     world = build_world(

@@ -51,14 +51,16 @@ class Scan:
     @cached_property
     def mesh_parts(self) -> list[MeshPart]:
         """The visual mesh, one part per material (loaded once)."""
-        return load_mesh_parts(self.mesh_path)
+        return load_mesh_parts(self.mesh_path, up=str(self.meta.get("up", "z")))
 
     @property
     def description(self) -> str:
         """One line saying what this scan is (printed in run banners and summaries)."""
-        source = {"procedural": "procedural house", "matterport": "Matterport3D scan"}.get(
-            self.kind, "scan folder"
-        )
+        source = {
+            "procedural": "procedural house",
+            "matterport": "Matterport3D scan",
+            "graph proxy": "graph proxy synthesised from the navigation graph, NOT the real mesh",
+        }.get(self.kind, "scan folder")
         g = self.graph
         return f"{self.scene_id} ({source}; {g.num_nodes} viewpoints, {g.num_edges} edges)"
 
@@ -73,9 +75,6 @@ def read_scan_folder(folder: Path, scene_id: str | None = None) -> Scan:
     folder = Path(folder)
     if not folder.is_dir():
         raise MissingDataError(f"scan folder not found: {folder}")
-    mesh = next((folder / n for n in (MESH_GLB, MESH_OBJ) if (folder / n).is_file()), None)
-    if mesh is None:
-        raise MissingDataError(f"scan folder {folder} has no {MESH_GLB} or {MESH_OBJ}")
     meta: dict[str, Any] = {}
     if (folder / META).is_file():
         try:
@@ -84,6 +83,15 @@ def read_scan_folder(folder: Path, scene_id: str | None = None) -> Scan:
             raise MalformedDataError(f"{folder / META}: invalid JSON ({exc})") from exc
         if not isinstance(meta, dict):
             raise MalformedDataError(f"{folder / META}: expected a JSON object")
+    # A converted Matterport scan names the user's mesh instead of holding a copy.
+    candidates = [folder / MESH_GLB, folder / MESH_OBJ]
+    if "mesh" in meta:
+        candidates.insert(0, Path(meta["mesh"]))
+    mesh = next((m for m in candidates if m.is_file()), None)
+    if mesh is None:
+        raise MissingDataError(
+            f"scan folder {folder} has no mesh: looked for {', '.join(map(str, candidates))}"
+        )
     graph = NavGraph.from_file(folder / CONNECTIVITY)
     regions = Regions.read(folder / REGIONS) if (folder / REGIONS).is_file() else None
     boxes = BoxSet.read(folder / BOXES) if (folder / BOXES).is_file() else None
@@ -138,33 +146,41 @@ def _procedural_is_current(folder: Path) -> bool:
     )
 
 
-def load_scan(scene: str, *, rebuild: bool = False) -> Scan:
-    """Loads a scene by id, building and caching procedural houses on first use.
+def load_scan(
+    scene: str,
+    *,
+    rebuild: bool = False,
+    mp3d_dir: Path | str | None = None,
+    connectivity_dir: Path | str | None = None,
+) -> Scan:
+    """Loads a scene by id, building and caching it on first use.
 
     Args:
-        scene: ``proc-<seed>``, a Matterport scan id with a built scan in the cache, or the
-            path of a scan folder.
-        rebuild: Regenerate a procedural house even if a cached copy exists.
+        scene: ``proc-<seed>``, a Matterport scan id, or the path of a scan folder.
+        rebuild: Rebuild the cached scan even if it is current.
+        mp3d_dir: Root of the user's Matterport3D data (raw or habitat layout); default
+            ``$HAVLN_MP3D_DIR``.
+        connectivity_dir: Folder of ``<scan>_connectivity.json`` graphs; default
+            ``$HAVLN_CONNECTIVITY_DIR``.
 
     Returns:
-        The scan.
+        The scan. A Matterport scan uses the user's mesh when found, else a graph proxy.
 
     Raises:
         UnknownSceneError: ``scene`` is not a valid id (the message gives the valid forms and
             the nearest known id).
-        MissingDataError: A Matterport scan that has not been built or supplied.
+        MissingDataError: A Matterport scan whose graph (and mesh) cannot be found; the message
+            says where it looked and how to get the data.
     """
     sid = parse_scene_id(scene, known_scene_ids())
     if sid.kind == "folder":
         return read_scan_folder(sid.path)
     target = scans_dir() / sid.text
     if sid.kind == "matterport":
-        if not target.is_dir():
-            raise MissingDataError(
-                f"Matterport3D scan {sid.text!r} is not available: no scan folder at {target}. "
-                "Supply the scan (mesh, connectivity, regions) as a scan folder there or pass "
-                "its folder path as the scene."
-            )
+        from havln_mj.scene.realscan import build_real_scan, real_scan_is_current
+
+        if rebuild or not real_scan_is_current(target, mp3d_dir):
+            build_real_scan(sid.text, target, mp3d_dir, connectivity_dir)
         return read_scan_folder(target, sid.text)
     assert sid.seed is not None
     if rebuild or not _procedural_is_current(target):

@@ -18,9 +18,10 @@ import trimesh
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.robot.point_body import add_point_body
 from havln_mj.scene.collision import CoacdParams, decompose
-from havln_mj.scene.mesh import MeshPart, parts_to_trimesh
+from havln_mj.scene.mesh import parts_to_trimesh
 from havln_mj.scene.scan import Scan
 from havln_mj.sim import groups
+from havln_mj.sim.visual import add_visual_parts
 
 COLLISION_MODES = ("auto", "boxes", "coacd", "none")
 
@@ -77,21 +78,6 @@ def _add_mesh_geom(
         inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL,  # open meshes have no volume
     )
     spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name, **geom)
-
-
-def _add_visual(spec: mujoco.MjSpec, parts: list[MeshPart]) -> None:
-    for k, part in enumerate(parts):
-        name = f"visual/{k}_{_safe_name(part.name)}"
-        _add_mesh_geom(
-            spec,
-            name,
-            part.vertices,
-            part.faces,
-            rgba=part.rgba,
-            group=groups.VISUAL,
-            contype=0,
-            conaffinity=0,
-        )
 
 
 def _add_boxes(spec: mujoco.MjSpec, scan: Scan) -> int:
@@ -191,7 +177,7 @@ def build_world(scan: Scan, options: WorldOptions | None = None) -> World:
             specular=(0.0, 0.0, 0.0),
             castshadow=False,
         )
-    _add_visual(spec, scan.mesh_parts)
+    add_visual_parts(spec, scan.mesh_parts)
     mode = options.collision
     if mode == "auto":
         mode = "boxes" if scan.boxes is not None else "coacd"

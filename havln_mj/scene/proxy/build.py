@@ -44,8 +44,7 @@ class ProxyParams:
         body_radius: Radius of the body whose walkability is checked.
         body_z: Heights above the floor the body's trunk occupies: a step lower than the
             band's bottom beside the path is stepped over, not bumped into.
-        step: Largest height difference between the interpolated floor of an edge and the
-            slab under it that still counts as support.
+        step: Largest rise or drop between neighbouring points of a path (a stair riser).
     """
 
     cell: float = 0.1
@@ -58,7 +57,7 @@ class ProxyParams:
     stair_rise: float = 0.3
     body_radius: float = 0.2
     body_z: tuple[float, float] = (0.3, 1.8)
-    step: float = 0.15
+    step: float = 0.2
 
     def __post_init__(self) -> None:
         if not 0.02 <= self.cell <= 0.5:
@@ -87,6 +86,16 @@ class _Layer:
             np.full(shape, -1),
             np.zeros(shape, bool),
         )
+
+    def clear(
+        self, cells: np.ndarray, window: tuple[slice, slice] = (slice(None), slice(None))
+    ) -> None:
+        """Makes ``cells`` (a mask over ``window`` of the grid) not free."""
+        self.wsum[window][cells] = 0.0
+        self.whsum[window][cells] = 0.0
+        self.comp[window][cells] = -1
+        self.stair[window][cells] = False
+        self.dist[window][cells] = np.inf
 
     @property
     def free(self) -> np.ndarray:
@@ -135,9 +144,9 @@ def _place(layers, shape, window, mask, height, dist, comp, stair, p: ProxyParam
         k += 1
 
 
-def _rasterise(graph: NavGraph, grid: Grid, p: ProxyParams) -> list[_Layer]:
-    comps = graph.components()
-    comp_of = {vp: k for k, members in enumerate(comps) for vp in members}
+def _rasterise(
+    graph: NavGraph, grid: Grid, p: ProxyParams, comp_of: dict[str, int]
+) -> list[_Layer]:
     layers: list[_Layer] = []
     nodes = sorted(graph.nodes, key=graph.floor_z)
     for vp in nodes:
@@ -165,23 +174,25 @@ def _rasterise(graph: NavGraph, grid: Grid, p: ProxyParams) -> list[_Layer]:
     return layers
 
 
+def _shifted(arr: np.ndarray, dr: int, dc: int) -> tuple[tuple[slice, slice], tuple[slice, slice]]:
+    """Slices pairing each cell with its neighbour at offset (dr, dc)."""
+    h, w = arr.shape
+    first = (slice(max(dr, 0), h), slice(max(dc, 0), w + min(dc, 0)))
+    second = (slice(0, h - dr), slice(max(-dc, 0), w - max(dc, 0)))
+    return first, second
+
+
 def _separate_components(layer: _Layer) -> None:
-    """Frees no cell shared by two components: the higher-numbered side becomes wall."""
+    """Walls off cells where two graph components touch (the higher-numbered side goes)."""
     comp = layer.comp
-    clash = np.zeros(comp.shape, dtype=bool)
+    cut = np.zeros(comp.shape, dtype=bool)
     for dr, dc in ((0, 1), (1, 0), (1, 1), (1, -1)):
-        a = comp[max(dr, 0) :, max(dc, 0) : comp.shape[1] + min(dc, 0)]
-        b = comp[: comp.shape[0] - dr, max(-dc, 0) : comp.shape[1] - max(dc, 0)]
+        s1, s2 = _shifted(comp, dr, dc)
+        a, b = comp[s1], comp[s2]
         both = (a >= 0) & (b >= 0) & (a != b)
-        hi_a = both & (a > b)
-        hi_b = both & (b > a)
-        clash[max(dr, 0) :, max(dc, 0) : comp.shape[1] + min(dc, 0)] |= hi_a
-        clash[: comp.shape[0] - dr, max(-dc, 0) : comp.shape[1] - max(dc, 0)] |= hi_b
-    layer.wsum[clash] = 0.0
-    layer.whsum[clash] = 0.0
-    layer.comp[clash] = -1
-    layer.stair[clash] = False
-    layer.dist[clash] = np.inf
+        cut[s1] |= both & (a > b)
+        cut[s2] |= both & (b > a)
+    layer.clear(cut)
 
 
 def _neighbour_extremes(height: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -224,20 +235,8 @@ def _cell_boxes(
     return lo, hi
 
 
-def proxy_boxes(
-    graph: NavGraph, params: ProxyParams | None = None
-) -> tuple[BoxSet, Grid, list[np.ndarray]]:
-    """Floors, stairs and walls of the graph proxy of ``graph``.
-
-    Returns:
-        The boxes, the plan grid, and each layer's free-cell mask.
-    """
-    p = params or ProxyParams()
-    xy = np.array([graph.position(v)[:2] for v in graph.nodes])
-    grid = Grid.around(xy, p.viewpoint_radius + 3 * p.cell, p.cell)
-    layers = _rasterise(graph, grid, p)
-    for layer in layers:
-        _separate_components(layer)
+def _layer_boxes(layers: list[_Layer], grid: Grid, p: ProxyParams) -> BoxSet:
+    """Floor, stair and wall boxes of the layers."""
     parts: list[tuple[np.ndarray, np.ndarray, str, str, tuple]] = []
     q = 0.05  # floor height quantum (a step a legged robot takes in its stride)
     for layer in layers:
@@ -258,14 +257,43 @@ def proxy_boxes(
                 wall &= ~(other.free & blocks)
         parts.append((*_cell_boxes(grid, wall, z0, z1), "wall", "wall", _WALL_RGBA))
     n = [len(lo) for lo, *_ in parts]
-    boxes = BoxSet(
+    return BoxSet(
         np.concatenate([lo for lo, *_ in parts]),
         np.concatenate([hi for _, hi, *_ in parts]),
         tuple(k for (_, _, k, _, _), m in zip(parts, n, strict=True) for _ in range(m)),
         tuple(mat for (_, _, _, mat, _), m in zip(parts, n, strict=True) for _ in range(m)),
         np.concatenate([np.tile(c, (m, 1)) for (*_, c), m in zip(parts, n, strict=True)]),
     )
-    return boxes, grid, [layer.free for layer in layers]
+
+
+@dataclass(frozen=True)
+class Proxy:
+    """A graph proxy's geometry and how well it serves the graph.
+
+    Attributes:
+        boxes: Floors, stairs and walls.
+        grid: The plan grid the geometry was drawn on.
+        free: Each layer's free cells.
+        unwalkable: Edges a body cannot walk (see ``edge_walkability``).
+    """
+
+    boxes: BoxSet
+    grid: Grid
+    free: list[np.ndarray]
+    unwalkable: list[tuple[str, str]]
+
+
+def build_proxy(graph: NavGraph, params: ProxyParams | None = None) -> Proxy:
+    """Draws the graph proxy of ``graph`` and checks every edge on it."""
+    p = params or ProxyParams()
+    xy = np.array([graph.position(v)[:2] for v in graph.nodes])
+    grid = Grid.around(xy, p.viewpoint_radius + 3 * p.cell, p.cell)
+    comp_of = {vp: k for k, members in enumerate(graph.components()) for vp in members}
+    layers = _rasterise(graph, grid, p, comp_of)
+    for layer in layers:
+        _separate_components(layer)
+    boxes = _layer_boxes(layers, grid, p)
+    return Proxy(boxes, grid, [layer.free for layer in layers], unwalkable_edges(graph, boxes, p))
 
 
 def edge_walkability(
@@ -298,7 +326,7 @@ def edge_walkability(
         if not np.isfinite(support).all():
             out["no_floor"].append((a, b))
             continue
-        if np.abs(np.diff(support)).max(initial=0.0) > p.step:
+        if np.abs(np.diff(support)).max(initial=0.0) > p.step + 1e-6:
             out["step"].append((a, b))
             continue
         r, s = p.body_radius, support[:, None]
