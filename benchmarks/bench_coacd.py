@@ -168,10 +168,13 @@ def main(argv: list[str] | None = None) -> int:
 
     if args.scene is not None:
         from havln_mj.scene.scan import load_scan
-        from havln_mj.sim.world import WorldOptions, collision_bands
+        from havln_mj.sim.world import WorldOptions, collision_chunks
 
         scan = load_scan(args.scene)
-        mesh = trimesh.util.concatenate(collision_bands(scan, WorldOptions().collision_band))
+        opts = WorldOptions()
+        mesh = trimesh.util.concatenate(
+            collision_chunks(scan, opts.collision_band, opts.collision_chunk)
+        )
         source = f"{scan.description}: exported mesh, collision band"
         solid = None
         if scan.boxes is not None:

@@ -136,10 +136,13 @@ def build_real_scan(
         raise
 
 
-def real_scan_is_current(folder: Path, mp3d_dir: Path | str | None) -> bool:
+def real_scan_is_current(
+    folder: Path, mp3d_dir: Path | str | None, connectivity_dir: Path | str | None
+) -> bool:
     """Whether a cached real scan matches the data the user points at now.
 
-    A proxy is stale once the user's mesh appears; a converted scan is stale if its mesh moved.
+    It is stale when built by another version, from another connectivity file, from another
+    mesh than the one the given Matterport root holds, or as a proxy once a mesh is found.
     """
     try:
         meta = json.loads((folder / META).read_text(encoding="utf-8"))
@@ -147,10 +150,18 @@ def real_scan_is_current(folder: Path, mp3d_dir: Path | str | None) -> bool:
         return False
     if meta.get("version") != REAL_SCAN_VERSION:
         return False
-    if meta.get("kind") == "matterport":
-        return Path(meta.get("mesh", "")).is_file()
+    conn_dir = resolve_connectivity_dir(connectivity_dir)
+    if conn_dir is not None:
+        conn = (conn_dir / f"{meta.get('scene_id')}_connectivity.json").resolve()
+        if str(conn) != meta.get("connectivity"):
+            return False
+    root = resolve_mp3d_root(mp3d_dir)
     try:
-        find_matterport_files(meta["scene_id"], resolve_mp3d_root(mp3d_dir))
-    except (MissingDataError, KeyError):
-        return True
-    return False
+        mesh = str(find_matterport_files(meta.get("scene_id", ""), root).mesh.resolve())
+    except MissingDataError:
+        mesh = None
+    if meta.get("kind") == "matterport":
+        if root is None:  # nothing new to compare with: keep it while its mesh is there
+            return Path(meta.get("mesh", "")).is_file()
+        return mesh == meta.get("mesh")
+    return mesh is None

@@ -179,7 +179,7 @@ def load_scan(
     if sid.kind == "matterport":
         from havln_mj.scene.realscan import build_real_scan, real_scan_is_current
 
-        if rebuild or not real_scan_is_current(target, mp3d_dir):
+        if rebuild or not real_scan_is_current(target, mp3d_dir, connectivity_dir):
             build_real_scan(sid.text, target, mp3d_dir, connectivity_dir)
         return read_scan_folder(target, sid.text)
     assert sid.seed is not None

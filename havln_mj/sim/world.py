@@ -35,6 +35,7 @@ class WorldOptions:
             "none".
         coacd: CoACD parameters for mesh decomposition.
         collision_band: Heights (below, above) each level's floor kept for CoACD collision.
+        collision_chunk: Tile size (m) for CoACD pieces when the scan has no regions.
         offscreen: (width, height) of the offscreen buffer (renderers enlarge it as needed).
         vfov_deg: Vertical field of view of the agent camera.
     """
@@ -42,6 +43,7 @@ class WorldOptions:
     collision: str = "auto"
     coacd: CoacdParams = field(default_factory=CoacdParams)
     collision_band: tuple[float, float] = (-0.3, 2.2)
+    collision_chunk: float = 6.0
     offscreen: tuple[int, int] = (640, 480)
     vfov_deg: float = 60.0
 
@@ -107,28 +109,58 @@ def _level_floors(scan: Scan) -> list[float]:
     return levels
 
 
-def collision_bands(scan: Scan, band: tuple[float, float]) -> list[trimesh.Trimesh]:
-    """The mesh cut into one horizontal slab per level, ``band`` metres around its floor.
+def _slice_box(mesh: trimesh.Trimesh, lo: np.ndarray, hi: np.ndarray) -> trimesh.Trimesh:
+    """The part of ``mesh`` inside the axis-aligned box [lo, hi] (open cuts, no caps)."""
+    for axis in range(3):
+        for sign, value in ((1.0, lo[axis]), (-1.0, hi[axis])):
+            normal = np.zeros(3)
+            normal[axis] = sign
+            origin = np.zeros(3)
+            origin[axis] = value
+            mesh = trimesh.intersections.slice_mesh_plane(mesh, normal, origin)
+            if len(mesh.faces) == 0:
+                return mesh
+    return mesh
 
-    Only geometry a ground robot can touch matters for collision; cutting off ceilings also
-    opens each storey, so CoACD does not read a closed building as one solid block.
+
+def collision_chunks(scan: Scan, band: tuple[float, float], chunk: float) -> list[trimesh.Trimesh]:
+    """The mesh cut into pieces for convex decomposition, one per region (or grid tile).
+
+    Each level keeps only ``band`` metres around its floor: geometry a ground robot can touch.
+    Cutting off ceilings also opens each storey, so CoACD does not read a closed building as
+    one solid block, and small pieces keep thin walls that a whole-house remesh would lose.
+    Pieces are regions grown by 0.25 m when the scan has regions, else ``chunk``-metre tiles.
     """
     mesh = parts_to_trimesh(scan.mesh_parts)
-    out = []
+    pieces = []
     for z in _level_floors(scan):
-        part = trimesh.intersections.slice_mesh_plane(mesh, [0, 0, 1], [0, 0, z + band[0]])
-        part = trimesh.intersections.slice_mesh_plane(part, [0, 0, -1], [0, 0, z + band[1]])
-        if len(part.faces):
-            out.append(part)
-    return out
+        z_lo, z_hi = z + band[0], z + band[1]
+        boxes = []
+        if scan.regions is not None:
+            for rg in scan.regions.regions:
+                if abs(scan.regions.levels[rg.level].z_floor - z) < 0.5:
+                    boxes.append((rg.polygon.min(axis=0) - 0.25, rg.polygon.max(axis=0) + 0.25))
+        if not boxes:
+            xy_lo, xy_hi = mesh.bounds[0, :2], mesh.bounds[1, :2]
+            n = np.maximum(1, np.ceil((xy_hi - xy_lo) / chunk)).astype(int)
+            size = (xy_hi - xy_lo) / n
+            boxes = [
+                (xy_lo + size * (i, j), xy_lo + size * (i + 1, j + 1))
+                for i in range(n[0])
+                for j in range(n[1])
+            ]
+        for lo, hi in boxes:
+            piece = _slice_box(mesh, np.array([lo[0], lo[1], z_lo]), np.array([hi[0], hi[1], z_hi]))
+            if len(piece.faces):
+                pieces.append(piece)
+    return pieces
 
 
 def _add_hulls(spec: mujoco.MjSpec, scan: Scan, options: WorldOptions) -> int:
-    hulls = [
-        h
-        for part in collision_bands(scan, options.collision_band)
-        for h in decompose(part, options.coacd)
-    ]
+    # One decomposition (and one cache entry) per piece: a re-run is instant and a crash
+    # loses at most one piece.
+    pieces = collision_chunks(scan, options.collision_band, options.collision_chunk)
+    hulls = [h for piece in pieces for h in decompose(piece, options.coacd)]
     for k, hull in enumerate(hulls):
         _add_mesh_geom(
             spec,

@@ -1,0 +1,115 @@
+"""``havln_mj`` command line: ``havln_mj scenes build <ids...>`` pre-builds scans.
+
+Each scene is built in its own process (scan folder, collision geometry, compiled world), so
+later runs load from the cache at once. Run ``havln_mj scenes build --help`` for options.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+from tqdm import tqdm
+
+from havln_mj.errors import HavlnError
+from havln_mj.sim.world import COLLISION_MODES
+
+
+def build_one(
+    scene: str, mp3d_dir: Path | None, connectivity_dir: Path | None, collision: str
+) -> dict:
+    """Builds one scene and its world; returns a summary row."""
+    from havln_mj.scene.scan import load_scan
+    from havln_mj.sim.world import WorldOptions, build_world
+
+    t0 = time.perf_counter()
+    scan = load_scan(scene, mp3d_dir=mp3d_dir, connectivity_dir=connectivity_dir)
+    world = build_world(scan, WorldOptions(collision=collision))
+    return {
+        "scene": scan.scene_id,
+        "kind": scan.kind,
+        "viewpoints": scan.graph.num_nodes,
+        "collision": world.collision,
+        "collision_geoms": world.n_collision_geoms,
+        "unwalkable_edges": scan.meta.get("unwalkable_edges"),
+        "seconds": round(time.perf_counter() - t0, 2),
+    }
+
+
+def _scene_ids(args: argparse.Namespace) -> list[str]:
+    ids = list(args.ids)
+    if args.all_connectivity:
+        if args.connectivity_dir is None:
+            raise HavlnError("--all-connectivity needs --connectivity-dir")
+        ids += sorted(
+            p.name[: -len("_connectivity.json")]
+            for p in args.connectivity_dir.glob("*_connectivity.json")
+        )
+    if not ids:
+        raise HavlnError("no scene ids given (e.g. proc-0 proc-1, or --all-connectivity)")
+    return ids
+
+
+def scenes_build(args: argparse.Namespace) -> int:
+    """Builds the scenes in parallel with a progress bar; prints one line per scene."""
+    ids = _scene_ids(args)
+    failures = 0
+    with ProcessPoolExecutor(max_workers=args.workers) as pool:
+        futures = {
+            pool.submit(build_one, s, args.mp3d_dir, args.connectivity_dir, args.collision): s
+            for s in ids
+        }
+        with tqdm(total=len(ids), desc="scenes", unit="scene") as bar:
+            for future in as_completed(futures):
+                scene = futures[future]
+                try:
+                    row = future.result()
+                    geoms = f"{row['collision_geoms']} {row['collision']} collision geoms"
+                    tqdm.write(
+                        f"{row['scene']}: {row['kind']}, {row['viewpoints']} viewpoints, "
+                        f"{geoms}, {row['seconds']} s"
+                    )
+                except HavlnError as exc:
+                    failures += 1
+                    tqdm.write(f"{scene}: FAILED: {exc}")
+                bar.update()
+    print(f"built {len(ids) - failures} of {len(ids)} scenes")
+    return 1 if failures else 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``havln_mj`` command."""
+    parser = argparse.ArgumentParser(prog="havln_mj", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="group", required=True)
+    scenes = sub.add_parser("scenes", help="scene tools").add_subparsers(
+        dest="command", required=True
+    )
+    build = scenes.add_parser("build", help="pre-build scans, collision geometry and worlds")
+    build.add_argument(
+        "ids", nargs="*", help="scene ids: proc-<seed>, Matterport scan ids, scan folders"
+    )
+    build.add_argument(
+        "--all-connectivity", action="store_true", help="every scan in --connectivity-dir"
+    )
+    build.add_argument("--mp3d-dir", type=Path, default=None, help="Matterport3D data root")
+    build.add_argument(
+        "--connectivity-dir", type=Path, default=None, help="folder of connectivity graphs"
+    )
+    build.add_argument("--collision", choices=COLLISION_MODES, default="auto")
+    build.add_argument("--workers", type=int, default=2, help="parallel processes (default 2)")
+    args = parser.parse_args(argv)
+    if args.workers < 1:
+        parser.error(f"--workers must be at least 1, got {args.workers}")
+    try:
+        return scenes_build(args)
+    except HavlnError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
