@@ -75,9 +75,11 @@ def test_unknown_scene_ids_fail_with_valid_forms_and_nearest():
         parse_scene_id("")
 
 
-def test_matterport_id_without_data_says_where_it_looked():
-    with pytest.raises(MissingDataError, match="17DRP5sb8fy"):
-        load_scan("17DRP5sb8fy")
+def test_matterport_id_without_data_says_where_it_looked(monkeypatch):
+    monkeypatch.delenv("HAVLN_MP3D_DIR", raising=False)
+    monkeypatch.delenv("HAVLN_CONNECTIVITY_DIR", raising=False)
+    with pytest.raises(MissingDataError, match=r"'1LXtFkjw3qL'.*--connectivity-dir.*--mp3d-dir"):
+        load_scan("1LXtFkjw3qL")
 
 
 def test_scan_folder_path_loads_and_bad_folders_fail(tmp_path):
