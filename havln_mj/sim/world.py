@@ -173,18 +173,16 @@ def _add_hulls(spec: mujoco.MjSpec, scan: Scan, options: WorldOptions) -> int:
     return len(hulls)
 
 
-def build_world(scan: Scan, options: WorldOptions | None = None) -> World:
-    """Compiles a scan into a MuJoCo model with the point-body agent and its camera.
+def world_spec(scan: Scan, options: WorldOptions | None = None) -> tuple[mujoco.MjSpec, str, int]:
+    """The uncompiled world: building, lights and the point-body agent with its camera.
 
-    Args:
-        scan: The building.
-        options: Build options (collision mode, CoACD parameters, buffer size, camera FOV).
+    Callers add bodies (robots, props) to the spec before compiling it; ``build_world`` is
+    this plus ``compile``.
 
     Returns:
-        The compiled world.
+        (spec, collision mode used, number of collision geoms).
     """
     options = options or WorldOptions()
-    t0 = time.perf_counter()
     spec = mujoco.MjSpec()
     spec.modelname = _safe_name(scan.scene_id)
     spec.compiler.degree = False
@@ -223,5 +221,20 @@ def build_world(scan: Scan, options: WorldOptions | None = None) -> World:
     elif mode == "coacd":
         n = _add_hulls(spec, scan, options)
     add_point_body(spec, options.vfov_deg)
+    return spec, mode, n
+
+
+def build_world(scan: Scan, options: WorldOptions | None = None) -> World:
+    """Compiles a scan into a MuJoCo model with the point-body agent and its camera.
+
+    Args:
+        scan: The building.
+        options: Build options (collision mode, CoACD parameters, buffer size, camera FOV).
+
+    Returns:
+        The compiled world.
+    """
+    t0 = time.perf_counter()
+    spec, mode, n = world_spec(scan, options)
     model = spec.compile()
     return World(model, scan, mode, n, time.perf_counter() - t0)
