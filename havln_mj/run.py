@@ -31,6 +31,7 @@ from havln_mj.robot.point_body import CAMERA, PointBody
 from havln_mj.scene.ids import parse_scene_id
 from havln_mj.scene.mesh import parts_to_trimesh
 from havln_mj.scene.navgraph import NavGraph
+from havln_mj.scene.navgrid import NavGrid
 from havln_mj.scene.scan import known_scene_ids, load_scan
 from havln_mj.sim import groups
 from havln_mj.sim.world import COLLISION_MODES, WorldOptions, build_world
@@ -216,6 +217,13 @@ def run(args: argparse.Namespace) -> dict:
     cv2.imwrite(str(frame_path), cv2.cvtColor(best_frame, cv2.COLOR_RGB2BGR))
     map_path = out / "topdown.png"
     level = graph.floor_z(episodes[0].start)
+    navgrid = None
+    if world.collision != "none":
+        navgrid = NavGrid.from_model(model, level)
+        for ep, rec in zip(episodes, records, strict=True):
+            if abs(graph.floor_z(ep.goal) - level) < 0.5:
+                d = navgrid.distance(graph.position(ep.start), graph.position(ep.goal))
+                rec["grid_geodesic_m"] = round(d, 3) if math.isfinite(d) else None
     draw_topdown(
         map_path,
         graph,
@@ -224,6 +232,7 @@ def run(args: argparse.Namespace) -> dict:
         [e.path for e in episodes],
         level_floor=level,
         title=scan.description,
+        navgrid=navgrid,
     )
     summary = {
         "havln_mj": __version__,

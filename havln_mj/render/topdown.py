@@ -15,6 +15,7 @@ from matplotlib.collections import LineCollection
 from matplotlib.patches import Polygon, Rectangle
 
 from havln_mj.scene.navgraph import NavGraph
+from havln_mj.scene.navgrid import NavGrid
 from havln_mj.scene.regions import Regions
 
 _PATH_COLOURS = ("#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b")
@@ -34,6 +35,7 @@ def draw_topdown(
     paths: Sequence[Sequence[str]] = (),
     level_floor: float = 0.0,
     title: str = "",
+    navgrid: NavGrid | None = None,
 ) -> None:
     """Writes a PNG map of one level.
 
@@ -45,9 +47,14 @@ def draw_topdown(
         paths: Viewpoint-id paths to highlight (start ○, goal ★).
         level_floor: Floor height of the level drawn; viewpoints of other levels are skipped.
         title: Figure title.
+        navgrid: Navigability grid of the level, shaded under the plan (blocked cells red
+            where only the robot's radius blocks them, grey where geometry is).
     """
     fig, ax = plt.subplots(figsize=(9, 9), dpi=110)
     cmap = plt.get_cmap("tab20")
+    if navgrid is not None:
+        image, extent = navgrid.image(alpha=110)
+        ax.imshow(image, origin="lower", extent=extent, zorder=0, interpolation="nearest")
     if regions is not None:
         labels = sorted({r.label for r in regions.regions})
         for rg in regions.regions:
