@@ -28,7 +28,7 @@ def proxies(shared_data):
 def test_edges_are_walkable(proxies, scan):
     graph, proxy = proxies[scan]
     assert proxy.unwalkable == [e for v in edge_walkability(graph, proxy.boxes).values() for e in v]
-    # Over all 90 graphs (benchmarks/bench_proxies.py) about 1.3 % of edges still fail, where
+    # Over all 90 graphs (benchmarks/bench_proxies.py) about 0.7 % of edges still fail, where
     # edges cross or stack at different floor heights; the single-storey samples are clean.
     assert len(proxy.unwalkable) <= 0.1 * graph.num_edges
     if scan in ("17DRP5sb8fy", "gZ6f7yhEvPG", "pLe4wQe7qrG"):

@@ -306,7 +306,8 @@ def edge_walkability(
     An edge fails with ``"no_floor"`` where a sample has no support, ``"step"`` where the
     support changes by more than ``step`` between samples, and ``"blocked"`` where a box meets
     the body's square footprint (radius ``body_radius``) in the ``body_z`` band above the
-    support.
+    support (its bottom above the highest support within a body radius along the path, so
+    the stairs ahead are not an obstacle).
     """
     p = params or ProxyParams()
     spacing = p.cell / 2
@@ -330,13 +331,18 @@ def edge_walkability(
             out["step"].append((a, b))
             continue
         r, s = p.body_radius, support[:, None]
+        # On a slope the floor under the front of the body is higher than under its centre:
+        # the band starts above the highest support within one body radius along the path.
+        k = int(np.ceil(r / spacing))
+        padded = np.pad(support, k, mode="edge")
+        ahead = np.lib.stride_tricks.sliding_window_view(padded, 2 * k + 1).max(axis=1)[:, None]
         meets = (
             (lo[..., 0] < x + r)
             & (hi[..., 0] > x - r)
             & (lo[..., 1] < y + r)
             & (hi[..., 1] > y - r)
         )
-        meets &= (lo[..., 2] < s + p.body_z[1]) & (hi[..., 2] > s + p.body_z[0])
+        meets &= (lo[..., 2] < s + p.body_z[1]) & (hi[..., 2] > ahead + p.body_z[0])
         if meets.any():
             out["blocked"].append((a, b))
     return out
