@@ -120,8 +120,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     os.environ.setdefault("HAVLN_CACHE", tempfile.mkdtemp(prefix="havln_bench_"))
 
-    from havln_mj.scene.navgrid import floor_heights
-    from havln_mj.scene.scan import load_scan
+    from havln_mj.scene.scan import floor_heights, load_scan
     from havln_mj.sim.world import build_world
 
     result: dict = {"spec": {"resolution": 0.05, "robot_radius": 0.25, "z_band": [0.1, 0.6]}}

@@ -34,7 +34,6 @@ from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
-from typing import TYPE_CHECKING
 
 import cv2
 import mujoco
@@ -47,9 +46,6 @@ from scipy.spatial import ConvexHull, QhullError
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.sim import groups
 
-if TYPE_CHECKING:
-    from havln_mj.scene.scan import Scan
-
 # Body heights (above the floor) that count as obstacles.
 LEGGED_BAND = (0.1, 0.6)  # a GO1-sized quadruped: legs of tables block, table tops do not
 PERSON_BAND = (0.05, 1.8)  # a person-height body (the point body's procedural sweep)
@@ -60,7 +56,6 @@ _NEIGHBOURS = (8, 16, 32)
 _FIELD_CACHE = 8  # distance fields kept per grid
 _ROUND_SEGMENTS = 16  # polygon sides used for spheres, capsules, cylinders, ellipsoids
 _ALL_PAIRS_MAX = 64  # up to this many vertices a hull is clipped along every vertex pair
-_LEVEL_GAP = 1.0  # viewpoint floor heights further apart than this are separate levels
 
 _BOX_SIGNS = np.array(
     [[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float
@@ -874,25 +869,3 @@ def build_navgrids(
     if bounds is None:
         bounds = _default_bounds(shapes, spec.margin)
     return [NavGrid._from_shapes(shapes, z, spec, bounds) for z in floors]
-
-
-def floor_heights(scan: Scan) -> list[float]:
-    """Floor heights of a building's levels, lowest first.
-
-    From the scan's regions when it has levels; otherwise the viewpoints' floor heights,
-    clustered into levels more than 1 m apart (each level at its lowest viewpoint floor).
-
-    Raises:
-        InvalidArgumentError: The scan has neither levels nor viewpoints.
-    """
-    if scan.regions is not None and scan.regions.levels:
-        return sorted(float(lv.z_floor) for lv in scan.regions.levels)
-    graph = scan.graph
-    zs = sorted(graph.floor_z(v) for v in graph.nodes)
-    if not zs:
-        raise InvalidArgumentError(f"scan {scan.scene_id!r} has no levels and no viewpoints")
-    levels = [zs[0]]
-    for z in zs[1:]:
-        if z - levels[-1] > _LEVEL_GAP:
-            levels.append(z)
-    return levels

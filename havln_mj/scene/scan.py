@@ -65,6 +65,31 @@ class Scan:
         return f"{self.scene_id} ({source}; {g.num_nodes} viewpoints, {g.num_edges} edges)"
 
 
+_LEVEL_GAP = 1.0  # viewpoint floor heights further apart than this are separate levels
+
+
+def floor_heights(scan: Scan) -> list[float]:
+    """Floor heights of a building's levels, lowest first.
+
+    From the scan's regions when it has levels; otherwise the viewpoints' floor heights,
+    clustered into levels more than 1 m apart (each level at its lowest viewpoint floor).
+
+    Raises:
+        MalformedDataError: The scan has neither levels nor viewpoints.
+    """
+    if scan.regions is not None and scan.regions.levels:
+        return sorted(float(lv.z_floor) for lv in scan.regions.levels)
+    graph = scan.graph
+    zs = sorted(graph.floor_z(v) for v in graph.nodes)
+    if not zs:
+        raise MalformedDataError(f"scan {scan.scene_id!r} has no levels and no viewpoints")
+    levels = [zs[0]]
+    for z in zs[1:]:
+        if z - levels[-1] > _LEVEL_GAP:
+            levels.append(z)
+    return levels
+
+
 def read_scan_folder(folder: Path, scene_id: str | None = None) -> Scan:
     """Reads a scan folder of the contract (mesh, connectivity, regions, optional boxes).
 

@@ -19,7 +19,7 @@ from havln_mj.errors import InvalidArgumentError
 from havln_mj.robot.point_body import add_point_body
 from havln_mj.scene.collision import CoacdParams, decompose
 from havln_mj.scene.mesh import parts_to_trimesh
-from havln_mj.scene.scan import Scan
+from havln_mj.scene.scan import Scan, floor_heights
 from havln_mj.sim import groups
 from havln_mj.sim.visual import add_visual_parts
 
@@ -97,18 +97,6 @@ def _add_boxes(spec: mujoco.MjSpec, scan: Scan) -> int:
     return len(boxes)
 
 
-def _level_floors(scan: Scan) -> list[float]:
-    """Floor heights of the building's levels (from its regions, else its viewpoints)."""
-    if scan.regions is not None and scan.regions.levels:
-        return sorted(lv.z_floor for lv in scan.regions.levels)
-    floors = sorted(scan.graph.floor_z(v) for v in scan.graph.nodes)
-    levels = [floors[0]]
-    for z in floors[1:]:
-        if z - levels[-1] > 1.0:
-            levels.append(z)
-    return levels
-
-
 def _slice_box(mesh: trimesh.Trimesh, lo: np.ndarray, hi: np.ndarray) -> trimesh.Trimesh:
     """The part of ``mesh`` inside the axis-aligned box [lo, hi] (open cuts, no caps)."""
     for axis in range(3):
@@ -133,7 +121,7 @@ def collision_chunks(scan: Scan, band: tuple[float, float], chunk: float) -> lis
     """
     mesh = parts_to_trimesh(scan.mesh_parts)
     pieces = []
-    for z in _level_floors(scan):
+    for z in floor_heights(scan):
         z_lo, z_hi = z + band[0], z + band[1]
         boxes = []
         if scan.regions is not None:

@@ -15,9 +15,8 @@ from havln_mj.scene.navgrid import (
     GridSpec,
     NavGrid,
     build_navgrids,
-    floor_heights,
 )
-from havln_mj.scene.scan import load_scan
+from havln_mj.scene.scan import floor_heights, load_scan
 from havln_mj.sim import groups
 from havln_mj.sim.world import build_world
 
