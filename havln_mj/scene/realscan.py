@@ -21,7 +21,11 @@ from havln_mj.errors import MissingDataError
 from havln_mj.scene.connectivity import read_connectivity
 from havln_mj.scene.matterport.frame import check_frame
 from havln_mj.scene.matterport.house import read_house
-from havln_mj.scene.matterport.layout import find_matterport_files, resolve_mp3d_root
+from havln_mj.scene.matterport.layout import (
+    find_house_file,
+    find_matterport_files,
+    resolve_mp3d_root,
+)
 from havln_mj.scene.mesh import boxes_to_parts, load_mesh_parts, parts_to_trimesh, write_glb
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.proxy.build import ProxyParams, build_proxy
@@ -103,7 +107,8 @@ def build_real_scan(
             "version": REAL_SCAN_VERSION,
             "connectivity": str(conn_path.resolve()),
         }
-        house = files.house if files else None
+        # Region labels come from the .house file, which a proxy can use without the mesh.
+        house = files.house if files else find_house_file(scan_id, root)
         regions = (
             read_house(house, viewpoint_ids=connectivity.ids)
             if house

@@ -113,3 +113,14 @@ def test_missing_data_says_what_was_looked_for_and_how_to_get_it(tmp_path):
     assert str(tmp_path / "XcA2TqTSSAj_connectivity.json") in text
     assert "Matterport3DSimulator" in text and "Terms of Use" in text
     assert "matterport_mesh" in text
+
+
+def test_proxy_takes_region_labels_from_a_house_file_without_mesh(tmp_path):
+    house, root, conn_dir = _made_up_matterport(tmp_path)
+    mesh_dir = root / "v1" / "scans" / SCAN / "matterport_mesh"
+    for f in mesh_dir.rglob("*.obj"):
+        f.unlink()
+    scan = load_scan(SCAN, mp3d_dir=root, connectivity_dir=conn_dir, rebuild=True)
+    assert scan.kind == "graph proxy"
+    assert [r.label for r in scan.regions.regions] == [r.label for r in house.regions.regions]
+    assert scan.regions.viewpoint_region == house.regions.viewpoint_region

@@ -119,6 +119,16 @@ def _zips(root: Path, scan_id: str) -> list[Path]:
     return found
 
 
+def find_house_file(scan_id: str, root: Path | str | None) -> Path | None:
+    """A scan's ``.house`` file in either layout under ``root``, even without its mesh."""
+    if root is None:
+        return None
+    for _, _, house, _, _ in _candidates(Path(root).expanduser(), scan_id):
+        if house.is_file():
+            return house
+    return None
+
+
 def find_matterport_files(scan_id: str, root: Path | str | None) -> MatterportFiles:
     """Finds a scan's mesh and annotations under a Matterport3D root.
 
