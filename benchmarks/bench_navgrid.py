@@ -15,7 +15,6 @@ import argparse
 import json
 import math
 import os
-import platform
 import statistics
 import sys
 import tempfile
@@ -23,16 +22,8 @@ import time
 
 import mujoco
 import numpy as np
+from common import machine, median_seconds
 from scipy import ndimage
-
-
-def _median_s(fn, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times)
 
 
 def synthetic_world(n_boxes: int, seed: int = 0, size: float = 30.0) -> mujoco.MjModel:
@@ -67,7 +58,7 @@ def bench_grid(model: mujoco.MjModel, floor: float, queries: int, seed: int) -> 
     from havln_mj.sim import groups
 
     spec = GridSpec()
-    build_s = _median_s(lambda: NavGrid.from_model(model, floor, spec), 3)
+    build_s = median_seconds(lambda: NavGrid.from_model(model, floor, spec), 3)
     grid = NavGrid.from_model(model, floor, spec)
     rng = np.random.default_rng(seed)
     # Sources and query points in the largest 8-connected part of the free cells.
@@ -84,7 +75,9 @@ def bench_grid(model: mujoco.MjModel, floor: float, queries: int, seed: int) -> 
     for g in fresh:
         g.distances_from(goals[0])  # builds the graph
     field_s = statistics.median(
-        _median_s(lambda g=g, k=k: g.distances_from(goals[k]), 1) for g in fresh for k in (1, 2, 3)
+        median_seconds(lambda g=g, k=k: g.distances_from(goals[k]), 1)
+        for g in fresh
+        for k in (1, 2, 3)
     )
     for goal in goals:
         grid.distances_from(goal)  # warm the cache
@@ -136,8 +129,7 @@ def main(argv: list[str] | None = None) -> int:
     synth = bench_grid(model, 0.0, args.queries, 0)
     synth["model_compile_s"] = round(compile_s, 2)
     result[f"synthetic_{args.boxes}_boxes_30m"] = synth
-    result["python"] = platform.python_version()
-    result["machine"] = platform.machine()
+    result["machine"] = machine()
     result["cpus"] = os.cpu_count()
     print(json.dumps(result, indent=2))
     return 0

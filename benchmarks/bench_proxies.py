@@ -12,13 +12,13 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import sys
 import time
 from pathlib import Path
 
 import mujoco
 import numpy as np
+from common import machine
 
 
 def main() -> int:
@@ -71,11 +71,7 @@ def main() -> int:
     print(
         json.dumps(
             {
-                "machine": {
-                    "cpus": os.cpu_count(),
-                    "python": platform.python_version(),
-                    "mujoco": mujoco.__version__,
-                },
+                "machine": machine(),
                 "scans": len(rows),
                 "edges": total_edges,
                 "unwalkable_edges": bad,

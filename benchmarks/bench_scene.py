@@ -8,22 +8,12 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
-import statistics
 import tempfile
 import time
 
 import mujoco
 import numpy as np
-
-
-def _median_time(fn, repeat: int) -> float:
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times)
+from common import machine, median_seconds
 
 
 def main() -> None:
@@ -46,7 +36,7 @@ def main() -> None:
         scan = load_scan(scene)
         world = build_world(scan)
         first = time.perf_counter() - t
-        cached = _median_time(lambda s=scene: build_world(load_scan(s)), 5)
+        cached = median_seconds(lambda s=scene: build_world(load_scan(s)), 5)
         builds.append(
             {
                 "scene": scene,
@@ -87,11 +77,7 @@ def main() -> None:
     print(
         json.dumps(
             {
-                "machine": {
-                    "cpus": os.cpu_count(),
-                    "python": platform.python_version(),
-                    "mujoco": mujoco.__version__,
-                },
+                "machine": machine(),
                 "scan_build": builds,
                 "scan_build_first_s_max": max(b["first_s"] for b in builds),
                 "scan_build_cached_s_max": max(b["cached_s"] for b in builds),

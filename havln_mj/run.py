@@ -24,14 +24,13 @@ from tqdm import tqdm
 from havln_mj import __version__
 from havln_mj.errors import HavlnError, InvalidArgumentError
 from havln_mj.frames import heading_to, wrap_angle
-from havln_mj.paths import asset_path
 from havln_mj.render.camera import Camera
 from havln_mj.render.topdown import draw_topdown
 from havln_mj.robot.point_body import CAMERA, PointBody
 from havln_mj.scene.ids import parse_scene_id
-from havln_mj.scene.mesh import parts_to_trimesh
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.navgrid import NavGrid
+from havln_mj.scene.procedural.recipe import load_recipe
 from havln_mj.scene.scan import known_scene_ids, load_scan
 from havln_mj.sim import groups
 from havln_mj.sim.world import COLLISION_MODES, WorldOptions, build_world
@@ -39,7 +38,7 @@ from havln_mj.sim.world import COLLISION_MODES, WorldOptions, build_world
 
 def default_scene() -> str:
     """The built-in default scene id (from ``scenes/procedural.json``)."""
-    return json.loads(asset_path("scenes", "procedural.json").read_text())["default_scene"]
+    return str(load_recipe()["default_scene"])
 
 
 @dataclass(frozen=True)
@@ -228,7 +227,7 @@ def run(args: argparse.Namespace) -> dict:
         map_path,
         graph,
         scan.regions,
-        parts_to_trimesh(scan.mesh_parts),
+        scan.mesh,
         [e.path for e in episodes],
         level_floor=level,
         title=scan.description,

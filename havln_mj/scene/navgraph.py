@@ -287,3 +287,21 @@ class NavGraph:
 
     def _edge_lengths(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         return np.linalg.norm(self._node_pos[rows] - self._node_pos[cols], axis=1)
+
+
+LEVEL_GAP = 1.0  # metres: viewpoint floors further apart than this are separate storeys
+
+
+def level_groups(graph: NavGraph, gap: float = LEVEL_GAP) -> list[list[str]]:
+    """Included viewpoints grouped into storeys, lowest first.
+
+    A storey starts at the lowest viewpoint floor not yet assigned and takes every viewpoint
+    whose floor is at most ``gap`` above that.
+    """
+    nodes = sorted(graph.nodes, key=graph.floor_z)
+    groups: list[list[str]] = []
+    for vp in nodes:
+        if not groups or graph.floor_z(vp) - graph.floor_z(groups[-1][0]) > gap:
+            groups.append([])
+        groups[-1].append(vp)
+    return groups

@@ -27,7 +27,7 @@ from havln_mj.scene.matterport.layout import (
     resolve_mp3d_root,
 )
 from havln_mj.scene.mesh import boxes_to_parts, load_mesh_parts, parts_to_trimesh, write_glb
-from havln_mj.scene.navgraph import NavGraph
+from havln_mj.scene.navgraph import NavGraph, level_groups
 from havln_mj.scene.proxy.build import ProxyParams, build_proxy
 from havln_mj.scene.regions import Level, Region, Regions
 from havln_mj.scene.scanfolder import BOXES, CONNECTIVITY, META, REGIONS
@@ -49,24 +49,16 @@ def resolve_connectivity_dir(arg: Path | str | None) -> Path | None:
 
 
 def _levels_from_graph(graph: NavGraph) -> Regions:
-    """One unlabelled region per storey when no ``.house`` file is available."""
-    floors = sorted(graph.floor_z(v) for v in graph.nodes)
-    groups: list[list[float]] = [[floors[0]]]
-    for z in floors[1:]:
-        if z - groups[-1][-1] > 1.5:
-            groups.append([])
-        groups[-1].append(z)
+    """One unlabelled region per storey (``level_groups``) when no ``.house`` file is found."""
     levels, regions, vp_region = [], [], {}
-    for k, zs in enumerate(groups):
-        z = float(np.median(zs))
-        members = [v for v in graph.nodes if zs[0] - 0.01 <= graph.floor_z(v) <= zs[-1] + 0.01]
+    for k, members in enumerate(level_groups(graph)):
+        z = float(np.median([graph.floor_z(v) for v in members]))
         xy = np.array([graph.position(v)[:2] for v in members])
         lo, hi = xy.min(axis=0) - 1.0, xy.max(axis=0) + 1.0
         levels.append(Level(k, z, z + 2.5))
         polygon = np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]])
-        regions.append(
-            Region(k, k, "-", polygon, np.array([lo[0], lo[1], z, hi[0], hi[1], z + 2.5]), 2.5)
-        )
+        bbox = np.array([lo[0], lo[1], z, hi[0], hi[1], z + 2.5])
+        regions.append(Region(k, k, "-", polygon, bbox, 2.5))
         vp_region.update({v: k for v in members})
     return Regions(tuple(levels), tuple(regions), (), vp_region)
 

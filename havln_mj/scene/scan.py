@@ -10,13 +10,15 @@ from functools import cached_property
 from pathlib import Path
 from typing import Any
 
+import trimesh
+
 from havln_mj.cache import atomic_replace_dir, staging_dir
 from havln_mj.errors import MalformedDataError, MissingDataError
 from havln_mj.paths import cache_dir
 from havln_mj.scene.boxes import BoxSet
 from havln_mj.scene.ids import parse_scene_id
-from havln_mj.scene.mesh import MeshPart, load_mesh_parts
-from havln_mj.scene.navgraph import NavGraph
+from havln_mj.scene.mesh import MeshPart, load_mesh_parts, parts_to_trimesh
+from havln_mj.scene.navgraph import NavGraph, level_groups
 from havln_mj.scene.regions import Regions
 from havln_mj.scene.scanfolder import BOXES, CONNECTIVITY, MESH_GLB, MESH_OBJ, META, REGIONS
 
@@ -53,6 +55,11 @@ class Scan:
         """The visual mesh, one part per material (loaded once)."""
         return load_mesh_parts(self.mesh_path, up=str(self.meta.get("up", "z")))
 
+    @cached_property
+    def mesh(self) -> trimesh.Trimesh:
+        """All mesh parts merged into one mesh (for sections, slices and decomposition)."""
+        return parts_to_trimesh(self.mesh_parts)
+
     @property
     def description(self) -> str:
         """One line saying what this scan is (printed in run banners and summaries)."""
@@ -65,29 +72,21 @@ class Scan:
         return f"{self.scene_id} ({source}; {g.num_nodes} viewpoints, {g.num_edges} edges)"
 
 
-_LEVEL_GAP = 1.0  # viewpoint floor heights further apart than this are separate levels
-
-
 def floor_heights(scan: Scan) -> list[float]:
     """Floor heights of a building's levels, lowest first.
 
     From the scan's regions when it has levels; otherwise the viewpoints' floor heights,
-    clustered into levels more than 1 m apart (each level at its lowest viewpoint floor).
+    grouped by ``level_groups`` (each level at its lowest viewpoint floor).
 
     Raises:
         MalformedDataError: The scan has neither levels nor viewpoints.
     """
     if scan.regions is not None and scan.regions.levels:
         return sorted(float(lv.z_floor) for lv in scan.regions.levels)
-    graph = scan.graph
-    zs = sorted(graph.floor_z(v) for v in graph.nodes)
-    if not zs:
+    groups = level_groups(scan.graph)
+    if not groups:
         raise MalformedDataError(f"scan {scan.scene_id!r} has no levels and no viewpoints")
-    levels = [zs[0]]
-    for z in zs[1:]:
-        if z - levels[-1] > _LEVEL_GAP:
-            levels.append(z)
-    return levels
+    return [scan.graph.floor_z(g[0]) for g in groups]
 
 
 def read_scan_folder(folder: Path, scene_id: str | None = None) -> Scan:

@@ -18,10 +18,9 @@ import trimesh
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.robot.point_body import add_point_body
 from havln_mj.scene.collision import CoacdParams, decompose
-from havln_mj.scene.mesh import parts_to_trimesh
 from havln_mj.scene.scan import Scan, floor_heights
 from havln_mj.sim import groups
-from havln_mj.sim.visual import add_visual_parts
+from havln_mj.sim.visual import add_visual_parts, safe_name
 
 COLLISION_MODES = ("auto", "boxes", "coacd", "none")
 
@@ -63,10 +62,6 @@ class World:
     collision: str  # "boxes", "coacd" or "none"
     n_collision_geoms: int
     build_seconds: float
-
-
-def _safe_name(text: str) -> str:
-    return "".join(c if c.isalnum() or c in "_-." else "_" for c in text)
 
 
 def _add_mesh_geom(
@@ -119,7 +114,7 @@ def collision_chunks(scan: Scan, band: tuple[float, float], chunk: float) -> lis
     one solid block, and small pieces keep thin walls that a whole-house remesh would lose.
     Pieces are regions grown by 0.25 m when the scan has regions, else ``chunk``-metre tiles.
     """
-    mesh = parts_to_trimesh(scan.mesh_parts)
+    mesh = scan.mesh
     pieces = []
     for z in floor_heights(scan):
         z_lo, z_hi = z + band[0], z + band[1]
@@ -172,7 +167,7 @@ def world_spec(scan: Scan, options: WorldOptions | None = None) -> tuple[mujoco.
     """
     options = options or WorldOptions()
     spec = mujoco.MjSpec()
-    spec.modelname = _safe_name(scan.scene_id)
+    spec.modelname = safe_name(scan.scene_id)
     spec.compiler.degree = False
     spec.option.gravity = (0.0, 0.0, -9.81)
     spec.visual.global_.offwidth = int(options.offscreen[0])

@@ -151,7 +151,7 @@ def _rasterise(
     nodes = sorted(graph.nodes, key=graph.floor_z)
     for vp in nodes:
         xy, f = graph.position(vp)[:2], graph.floor_z(vp)
-        window, d, _ = disc(grid, xy, p.viewpoint_radius)
+        window, d = disc(grid, xy, p.viewpoint_radius)
         _place(
             layers,
             grid.shape,

@@ -36,13 +36,10 @@ class Grid:
         return slice(r0, r1), slice(c0, c1), gx, gy
 
 
-def disc(
-    grid: Grid, centre: np.ndarray, radius: float
-) -> tuple[tuple[slice, slice], np.ndarray, np.ndarray]:
-    """Cells of a disc: (window, distance to centre, parameter t = 0) over the window."""
+def disc(grid: Grid, centre: np.ndarray, radius: float) -> tuple[tuple[slice, slice], np.ndarray]:
+    """Cells near a disc: (window, distance to the centre) over the window."""
     rs, cs, gx, gy = grid.window(centre - radius, centre + radius)
-    d = np.hypot(gx - centre[0], gy - centre[1])
-    return (rs, cs), d, np.zeros_like(d)
+    return (rs, cs), np.hypot(gx - centre[0], gy - centre[1])
 
 
 def corridor(
