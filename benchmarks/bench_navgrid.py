@@ -28,7 +28,7 @@ from scipy import ndimage
 
 def synthetic_world(n_boxes: int, seed: int = 0, size: float = 30.0) -> mujoco.MjModel:
     """A size x size m floor with ``n_boxes`` random boxes and 20 random convex hulls."""
-    from havln_mj.sim import groups
+    from havln_mj import groups
 
     rng = np.random.default_rng(seed)
     spec = mujoco.MjSpec()
@@ -54,8 +54,8 @@ def synthetic_world(n_boxes: int, seed: int = 0, size: float = 30.0) -> mujoco.M
 
 
 def bench_grid(model: mujoco.MjModel, floor: float, queries: int, seed: int) -> dict:
+    from havln_mj import groups
     from havln_mj.scene.navgrid import GridSpec, NavGrid
-    from havln_mj.sim import groups
 
     spec = GridSpec()
     build_s = median_seconds(lambda: NavGrid.from_model(model, floor, spec), 3)

@@ -23,10 +23,10 @@ def main() -> None:
     args = ap.parse_args()
     os.environ["HAVLN_CACHE"] = tempfile.mkdtemp(prefix="havln_bench_")  # really cold
 
+    from havln_mj import groups
     from havln_mj.render.camera import Camera
     from havln_mj.robot.point_body import CAMERA, PointBody
     from havln_mj.scene.scan import load_scan
-    from havln_mj.sim import groups
     from havln_mj.sim.world import build_world
 
     builds = []

@@ -23,8 +23,24 @@ class UnknownSceneError(HavlnError, ValueError):
     """A scene id that is neither a valid procedural id nor a known scan."""
 
 
+class UnknownScanError(UnknownSceneError, IndexError):
+    """A scan id the simulator has no navigation graph for (MatterSim raises IndexError)."""
+
+
 class UnknownViewpointError(HavlnError, ValueError):
     """A viewpoint id that is not in the scan's navigation graph (or is excluded)."""
+
+
+class BatchSizeError(InvalidArgumentError, IndexError):
+    """A batched argument whose length is not the batch size (MatterSim raises IndexError)."""
+
+
+class InvalidActionError(InvalidArgumentError):
+    """An action index outside the current navigable locations, or a non-finite turn."""
+
+
+class NotInitializedError(HavlnError, RuntimeError):
+    """A simulator call that needs ``initialize``/``newEpisode`` first (MatterSim: RuntimeError)."""
 
 
 class MalformedDataError(HavlnError, ValueError):

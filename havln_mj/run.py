@@ -21,7 +21,7 @@ import mujoco
 import numpy as np
 from tqdm import tqdm
 
-from havln_mj import __version__
+from havln_mj import __version__, groups
 from havln_mj.errors import HavlnError, InvalidArgumentError
 from havln_mj.frames import heading_to, wrap_angle
 from havln_mj.render.camera import Camera
@@ -32,7 +32,6 @@ from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.navgrid import NavGrid
 from havln_mj.scene.procedural.recipe import load_recipe
 from havln_mj.scene.scan import known_scene_ids, load_scan
-from havln_mj.sim import groups
 from havln_mj.sim.world import COLLISION_MODES, WorldOptions, build_world
 
 

@@ -43,8 +43,8 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 from scipy.spatial import ConvexHull, QhullError
 
+from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
-from havln_mj.sim import groups
 
 # Body heights (above the floor) that count as obstacles.
 LEGGED_BAND = (0.1, 0.6)  # a GO1-sized quadruped: legs of tables block, table tops do not

@@ -21,9 +21,9 @@ import logging
 import mujoco
 import numpy as np
 
+from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.scene.mesh import MeshPart
-from havln_mj.sim import groups
 
 log = logging.getLogger(__name__)
 

@@ -15,11 +15,11 @@ import mujoco
 import numpy as np
 import trimesh
 
+from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.robot.point_body import add_point_body
 from havln_mj.scene.collision import CoacdParams, decompose
 from havln_mj.scene.scan import Scan, floor_heights
-from havln_mj.sim import groups
 from havln_mj.sim.visual import add_visual_parts, safe_name
 
 COLLISION_MODES = ("auto", "boxes", "coacd", "none")

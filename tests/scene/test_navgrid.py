@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from scipy.spatial import ConvexHull
 
+from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.scene.navgrid import (
     PERSON_BAND,
@@ -17,7 +18,6 @@ from havln_mj.scene.navgrid import (
     build_navgrids,
 )
 from havln_mj.scene.scan import floor_heights, load_scan
-from havln_mj.sim import groups
 from havln_mj.sim.world import build_world
 
 RES = 0.05

@@ -8,12 +8,12 @@ import mujoco
 import numpy as np
 import pytest
 
+from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.scene.connectivity import FIELDS, dumps_connectivity
 from havln_mj.scene.procedural.generate import generate_house, write_scan
 from havln_mj.scene.regions import REGION_LABELS
 from havln_mj.scene.scan import load_scan, read_scan_folder
-from havln_mj.sim import groups
 from havln_mj.sim.world import build_world
 
 SEEDS = range(20)

@@ -10,9 +10,9 @@ import pytest
 import trimesh
 from PIL import Image
 
+from havln_mj import groups
 from havln_mj.render.camera import Camera
 from havln_mj.scene.mesh import MeshPart, load_mesh_parts
-from havln_mj.sim import groups
 from havln_mj.sim.visual import add_visual_parts
 
 RED, BLUE, GREEN, YELLOW = (255, 0, 0), (0, 0, 255), (0, 255, 0), (255, 255, 0)

@@ -6,6 +6,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.frames import forward
 from havln_mj.render.camera import Camera
@@ -13,7 +14,6 @@ from havln_mj.robot.point_body import CAMERA, PointBody
 from havln_mj.scene.collision import CoacdParams
 from havln_mj.scene.procedural.generate import generate_house, write_scan
 from havln_mj.scene.scan import load_scan, read_scan_folder
-from havln_mj.sim import groups
 from havln_mj.sim.world import WorldOptions, build_world
 
 # Small enough for CI: a ~15 m² house and a coarse remesh.

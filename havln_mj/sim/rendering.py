@@ -1,0 +1,98 @@
+"""Rendering the agent's view through the simulator API, in MatterSim's image formats.
+
+MatterSim hands out BGR ``uint8`` colour and ``uint16`` depth in 0.25 mm units (planar
+z-distance, 0 = no reading, so anything beyond 16.38 m reads 0). Users who prefer RGB or
+``float32`` metres ask the simulator for them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from havln_mj.render.camera import Camera, Frame
+from havln_mj.robot.point_body import CAMERA, PointBody
+from havln_mj.scene.scan import Scan
+from havln_mj.sim.world import WorldOptions, build_world
+
+DEPTH_UNITS_PER_M = 4000.0  # MatterSim / Matterport depth: 0.25 mm per unit
+_UINT16_MAX = 65535
+
+
+@dataclass(frozen=True)
+class ViewSettings:
+    """What each rendered frame looks like.
+
+    Attributes:
+        width: Image width in pixels.
+        height: Image height in pixels.
+        vfov: Vertical field of view in radians.
+        depth: Whether depth is rendered.
+    """
+
+    width: int
+    height: int
+    vfov: float
+    depth: bool
+
+
+def depth_to_mattersim(depth_m: np.ndarray) -> np.ndarray:
+    """Metres to MatterSim's H×W×1 ``uint16`` in 0.25 mm units (out of range reads 0)."""
+    units = np.rint(depth_m * DEPTH_UNITS_PER_M)
+    units[units > _UINT16_MAX] = 0
+    return units.astype(np.uint16)[..., None]
+
+
+class SceneView:
+    """A scan's world with the point-body camera, rendered at one agent pose at a time."""
+
+    def __init__(self, scan: Scan, options: WorldOptions) -> None:
+        self.world = build_world(scan, options)
+        self.data = mujoco.MjData(self.world.model)
+        self._body = PointBody(np.zeros(3))
+        self._camera: Camera | None = None
+        self._settings: ViewSettings | None = None
+
+    def configure(self, settings: ViewSettings) -> None:
+        """Makes the camera match ``settings`` (recreated only when the size changes)."""
+        if settings == self._settings:
+            return
+        old = self._settings
+        if (
+            self._camera is None
+            or old is None
+            or (old.width, old.height)
+            != (
+                settings.width,
+                settings.height,
+            )
+        ):
+            if self._camera is not None:
+                self._camera.close()
+            self._camera = Camera(
+                self.world.model,
+                CAMERA,
+                settings.width,
+                settings.height,
+                math.degrees(settings.vfov),
+            )
+        else:
+            self._camera.set_vfov(math.degrees(settings.vfov))
+        self._settings = settings
+
+    def render(self, position: np.ndarray, heading: float, elevation: float) -> Frame:
+        """Renders the view from a camera pose (metres, radians)."""
+        assert self._camera is not None and self._settings is not None, "configure() first"
+        self._body.set_pose(position, heading, elevation)
+        self._body.write(self.world.model, self.data)
+        return self._camera.render(self.data, rgb=True, depth=self._settings.depth)
+
+    def close(self) -> None:
+        """Releases the camera's GL resources."""
+        if self._camera is not None:
+            self._camera.close()
+            self._camera = None
+            self._settings = None
