@@ -1,0 +1,189 @@
+"""Quaternion and rotation helpers, vectorised over any leading dimensions.
+
+Quaternions are ``(..., 4)`` arrays ``(w, x, y, z)`` (MuJoCo's order), unit length; rotation
+matrices are ``(..., 3, 3)`` acting on column vectors.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+_EPS = 1e-12
+
+
+def normalize(q: np.ndarray) -> np.ndarray:
+    """Unit quaternions (the zero quaternion becomes the identity)."""
+    q = np.asarray(q, dtype=float)
+    n = np.linalg.norm(q, axis=-1, keepdims=True)
+    ident = np.zeros_like(q)
+    ident[..., 0] = 1.0
+    return np.where(n > _EPS, q / np.maximum(n, _EPS), ident)
+
+
+def identity(shape: tuple[int, ...] = ()) -> np.ndarray:
+    """Identity quaternions of the given leading shape."""
+    q = np.zeros((*shape, 4))
+    q[..., 0] = 1.0
+    return q
+
+
+def mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product ``a ⊗ b`` (rotate by ``b``, then by ``a``)."""
+    aw, ax, ay, az = np.moveaxis(np.asarray(a, float), -1, 0)
+    bw, bx, by, bz = np.moveaxis(np.asarray(b, float), -1, 0)
+    return np.stack(
+        [
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ],
+        axis=-1,
+    )
+
+
+def conj(q: np.ndarray) -> np.ndarray:
+    """The inverse of unit quaternions."""
+    return np.asarray(q, float) * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Rotates vectors ``v (..., 3)`` by quaternions ``q (..., 4)``."""
+    q = np.asarray(q, float)
+    v = np.asarray(v, float)
+    w, u = q[..., :1], q[..., 1:]
+    t = 2.0 * np.cross(u, v)
+    return v + w * t + np.cross(u, t)
+
+
+def from_axis_angle(aa: np.ndarray) -> np.ndarray:
+    """Quaternions from axis-angle (Rodrigues) vectors ``(..., 3)``."""
+    aa = np.asarray(aa, float)
+    angle = np.linalg.norm(aa, axis=-1, keepdims=True)
+    half = 0.5 * angle
+    # sin(θ/2)/θ → 1/2 as θ → 0.
+    k = np.where(angle > 1e-8, np.sin(half) / np.maximum(angle, 1e-8), 0.5 - angle**2 / 48.0)
+    return np.concatenate([np.cos(half), aa * k], axis=-1)
+
+
+def to_axis_angle(q: np.ndarray) -> np.ndarray:
+    """Axis-angle vectors ``(..., 3)`` of quaternions, angles in [0, π]."""
+    q = normalize(q)
+    q = np.where(q[..., :1] < 0, -q, q)  # the short way round
+    s = np.linalg.norm(q[..., 1:], axis=-1, keepdims=True)
+    angle = 2.0 * np.arctan2(s, q[..., :1])
+    k = np.where(s > 1e-8, angle / np.maximum(s, 1e-8), 2.0)
+    return q[..., 1:] * k
+
+
+def from_axis(axis: np.ndarray | tuple, angle: np.ndarray | float) -> np.ndarray:
+    """Quaternions of rotations by ``angle`` (any shape) about one unit ``axis``."""
+    axis = np.asarray(axis, float) / np.linalg.norm(axis)
+    half = 0.5 * np.asarray(angle, float)[..., None]
+    return np.concatenate([np.cos(half), np.sin(half) * axis], axis=-1)
+
+
+def to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices ``(..., 3, 3)`` of quaternions."""
+    w, x, y, z = np.moveaxis(normalize(q), -1, 0)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=-2,
+    )
+
+
+def from_matrix(m: np.ndarray) -> np.ndarray:
+    """Quaternions (w ≥ 0) of rotation matrices ``(..., 3, 3)``."""
+    m = np.asarray(m, float)
+    m00, m11, m22 = m[..., 0, 0], m[..., 1, 1], m[..., 2, 2]
+    # Four candidate formulas; each is stable where its diagonal term is largest.
+    cands = np.stack(
+        [
+            np.stack(
+                [
+                    1 + m00 + m11 + m22,
+                    m[..., 2, 1] - m[..., 1, 2],
+                    m[..., 0, 2] - m[..., 2, 0],
+                    m[..., 1, 0] - m[..., 0, 1],
+                ],
+                -1,
+            ),
+            np.stack(
+                [
+                    m[..., 2, 1] - m[..., 1, 2],
+                    1 + m00 - m11 - m22,
+                    m[..., 0, 1] + m[..., 1, 0],
+                    m[..., 0, 2] + m[..., 2, 0],
+                ],
+                -1,
+            ),
+            np.stack(
+                [
+                    m[..., 0, 2] - m[..., 2, 0],
+                    m[..., 0, 1] + m[..., 1, 0],
+                    1 - m00 + m11 - m22,
+                    m[..., 1, 2] + m[..., 2, 1],
+                ],
+                -1,
+            ),
+            np.stack(
+                [
+                    m[..., 1, 0] - m[..., 0, 1],
+                    m[..., 0, 2] + m[..., 2, 0],
+                    m[..., 1, 2] + m[..., 2, 1],
+                    1 - m00 - m11 + m22,
+                ],
+                -1,
+            ),
+        ],
+        axis=-2,
+    )  # (..., 4, 4)
+    best = np.argmax(np.stack([m00 + m11 + m22, m00, m11, m22], -1), axis=-1)
+    q = np.take_along_axis(cands, best[..., None, None], axis=-2)[..., 0, :]
+    q = normalize(q)
+    return np.where(q[..., :1] < 0, -q, q)
+
+
+def from_rot6d(r6: np.ndarray) -> np.ndarray:
+    """Quaternions from the 6-D rotation representation ``(..., 6)``.
+
+    The six numbers are the first two *rows* of the rotation matrix (the convention of
+    PyTorch3D's ``matrix_to_rotation_6d``, used by MDM and HAPS); Gram–Schmidt makes them
+    orthonormal and the third row is their cross product.
+    """
+    r6 = np.asarray(r6, float)
+    a1, a2 = r6[..., :3], r6[..., 3:]
+    b1 = a1 / np.maximum(np.linalg.norm(a1, axis=-1, keepdims=True), _EPS)
+    a2 = a2 - np.sum(b1 * a2, axis=-1, keepdims=True) * b1
+    b2 = a2 / np.maximum(np.linalg.norm(a2, axis=-1, keepdims=True), _EPS)
+    b3 = np.cross(b1, b2)
+    return from_matrix(np.stack([b1, b2, b3], axis=-2))
+
+
+def slerp(q0: np.ndarray, q1: np.ndarray, t: np.ndarray | float) -> np.ndarray:
+    """Spherical interpolation from ``q0`` to ``q1`` at fractions ``t`` (broadcast over ``...``)."""
+    q0, q1 = normalize(q0), normalize(q1)
+    t = np.asarray(t, float)[..., None]
+    dot = np.sum(q0 * q1, axis=-1, keepdims=True)
+    q1 = np.where(dot < 0, -q1, q1)  # the short way round
+    dot = np.abs(dot)
+    theta = np.arccos(np.clip(dot, -1.0, 1.0))
+    sin = np.sin(theta)
+    near = sin < 1e-6
+    w0 = np.where(near, 1.0 - t, np.sin((1.0 - t) * theta) / np.where(near, 1.0, sin))
+    w1 = np.where(near, t, np.sin(t * theta) / np.where(near, 1.0, sin))
+    return normalize(w0 * q0 + w1 * q1)
+
+
+def yaw(angle: np.ndarray | float) -> np.ndarray:
+    """Quaternions of rotations by ``angle`` about +z (counter-clockwise seen from above)."""
+    return from_axis((0.0, 0.0, 1.0), angle)
+
+
+def from_heading(heading: np.ndarray | float) -> np.ndarray:
+    """The body orientation of a person facing ``heading`` (from +y, turning right)."""
+    return yaw(-np.asarray(heading, float))
