@@ -1,8 +1,10 @@
 """``python -m havln_mj.run``: build a scene and walk shortest paths through it on camera.
 
-Writes to ``--out``: ``egocentric.mp4`` (the agent's view), ``frame.png`` (the most detailed
-view of the first episode), ``topdown.png`` (floor plan, rooms, graph, the walked paths) and
-``summary.json``.
+People are placed by HA3D's rule and go about their activities while the agent walks; the
+agent's collisions with them (within 1 m, checked at 16 Hz along the way) are counted per
+episode. Writes to ``--out``: ``egocentric.mp4`` (the agent's view), ``frame.png`` (the view
+showing people best, else the most detailed view of the first episode), ``topdown.png``
+(floor plan, rooms, graph, the walked paths, people) and ``summary.json``.
 """
 
 from __future__ import annotations
@@ -24,6 +26,9 @@ from tqdm import tqdm
 from havln_mj import __version__, groups
 from havln_mj.errors import HavlnError, InvalidArgumentError
 from havln_mj.frames import heading_to, wrap_angle
+from havln_mj.humans.crowd import Crowd
+from havln_mj.humans.mujoco_people import PeopleWriter
+from havln_mj.humans.population import populate
 from havln_mj.render.camera import Camera
 from havln_mj.render.topdown import draw_topdown
 from havln_mj.robot.point_body import CAMERA, PointBody
@@ -32,6 +37,7 @@ from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.navgrid import NavGrid
 from havln_mj.scene.procedural.recipe import load_recipe
 from havln_mj.scene.scan import known_scene_ids, load_scan
+from havln_mj.sim.crowd import COLLISION_DISTANCE, SAMPLE_HZ, Proximity, proximity
 from havln_mj.sim.world import COLLISION_MODES, WorldOptions, build_world
 
 
@@ -96,6 +102,25 @@ def walk(body: PointBody, graph: NavGraph, path: Sequence[str], fps: float):
         t += duration
 
 
+def _nearest_person(crowd: Crowd, t: float, position: np.ndarray) -> float:
+    """Horizontal distance from ``position`` to the nearest pelvis at time ``t`` (inf if none)."""
+    if not len(crowd):
+        return math.inf
+    pelvis = crowd.positions(np.array([t]))[0]
+    return float(np.min(np.hypot(*(pelvis[:, :2] - position[:2]).T)))
+
+
+def _collisions(crowd: Crowd, track: np.ndarray) -> Proximity:
+    """The people an episode's track ``(n, 4)`` of ``(t, x, y, z)`` came within 1 m of.
+
+    The track is piecewise linear between samples, so resampling it at 16 Hz is exact.
+    """
+    t = track[:, 0]
+    dense = np.union1d(t, np.arange(t[0], t[-1], 1.0 / SAMPLE_HZ))
+    xyz = np.column_stack([np.interp(dense, t, track[:, i]) for i in (1, 2, 3)])
+    return proximity(crowd, dense, xyz)
+
+
 def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     """Parses command-line arguments."""
     p = argparse.ArgumentParser(prog="python -m havln_mj.run", description=__doc__.splitlines()[0])
@@ -114,6 +139,7 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--vfov", type=float, default=60.0, help="vertical field of view, degrees")
     p.add_argument("--fps", type=float, default=10.0, help="video frames per simulated second")
     p.add_argument("--collision", choices=COLLISION_MODES, default="auto")
+    p.add_argument("--no-people", action="store_true", help="leave the scene empty")
     p.add_argument(
         "--mp3d-dir",
         type=Path,
@@ -146,11 +172,15 @@ def run(args: argparse.Namespace) -> dict:
     scan = load_scan(scene, mp3d_dir=args.mp3d_dir, connectivity_dir=args.connectivity_dir)
     t_scan = time.perf_counter() - t0
     print(f"havln_mj {__version__}: {scan.description}", flush=True)
+    crowd = Crowd([]) if args.no_people else populate(scan, np.random.default_rng([args.seed, 1]))
+    print(f"people: {len(crowd)}", *(f"{p.text} ({p.region})" for p in crowd.people), sep="\n  ")
     world = build_world(
         scan,
         WorldOptions(
             collision=args.collision, offscreen=(args.width, args.height), vfov_deg=args.vfov
         ),
+        crowd.shapes,
+        crowd.skins,
     )
     print(
         f"world: {world.model.ngeom} geoms, collision {world.collision} "
@@ -168,7 +198,9 @@ def run(args: argparse.Namespace) -> dict:
     )
     if not writer.isOpened():
         raise HavlnError(f"cannot open an MP4 writer for {video_path}")
-    records, render_s, frames = [], 0.0, 0
+    people = PeopleWriter(model, len(crowd))
+    human_geom = model.geom_group == groups.HUMANS
+    records, render_s, frames, clock = [], 0.0, 0, 0.0
     best_detail, best_frame = -1.0, None
     with Camera(
         model, CAMERA, args.width, args.height, args.vfov, geom_groups=groups.CAMERA_GROUPS
@@ -176,16 +208,20 @@ def run(args: argparse.Namespace) -> dict:
         for k, ep in enumerate(tqdm(episodes, desc="episodes", unit="ep")):
             start = graph.position(ep.start)
             body = PointBody(start, heading=heading_to(start, graph.position(ep.path[1])))
-            sim_t, ep_frames = 0.0, 0
+            sim_t, ep_frames, track = 0.0, 0, []
             for sim_t in walk(body, graph, ep.path, args.fps):
+                track.append((clock + sim_t, *body.position))
+                people.write(data, *crowd.pose(clock + sim_t))
                 body.write(model, data)
                 t0 = time.perf_counter()
                 rgb = cam.render(data, depth=False).rgb
                 render_s += time.perf_counter() - t0
                 bgr = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
+                near = _nearest_person(crowd, clock + sim_t, body.position)
                 cv2.putText(
                     bgr,
-                    f"episode {k + 1}/{len(episodes)}  t={sim_t:5.1f}s",
+                    f"episode {k + 1}/{len(episodes)}  t={sim_t:5.1f}s"
+                    + ("  COLLISION" if near <= COLLISION_DISTANCE else ""),
                     (8, 20),
                     cv2.FONT_HERSHEY_SIMPLEX,
                     0.5,
@@ -194,11 +230,20 @@ def run(args: argparse.Namespace) -> dict:
                     cv2.LINE_AA,
                 )
                 writer.write(bgr)
-                if k == 0 and rgb.std() > best_detail:  # keep the most detailed first-episode view
-                    best_detail, best_frame = float(rgb.std()), rgb
+                # Keep the view showing people best (checked a few times a second), else
+                # the most detailed first-episode view.
+                score = float(rgb.std()) / 1e3 if k == 0 else -1.0
+                if len(crowd) and ep_frames % max(1, round(args.fps / 3)) == 0:
+                    ids = cam.render_geom_ids(data)
+                    seen = float((human_geom[np.maximum(ids, 0)] & (ids >= 0)).mean())
+                    score += seen if seen < 0.2 else 0.0  # whole people, not one up close
+                if score > best_detail:
+                    best_detail, best_frame = score, rgb
 
                 ep_frames += 1
             frames += ep_frames
+            contact = _collisions(crowd, np.array(track))
+            clock += sim_t
             records.append(
                 {
                     "start": ep.start,
@@ -209,6 +254,11 @@ def run(args: argparse.Namespace) -> dict:
                     "path_length_m": round(graph.path_length(ep.path), 3),
                     "sim_seconds": round(sim_t, 3),
                     "frames": ep_frames,
+                    "human_collisions": len(contact.people),
+                    "people_hit": [crowd.people[i].text for i in contact.people],
+                    "min_human_distance_m": (
+                        round(contact.min_distance, 3) if len(crowd) else None
+                    ),
                 }
             )
     writer.release()
@@ -231,6 +281,7 @@ def run(args: argparse.Namespace) -> dict:
         level_floor=level,
         title=scan.description,
         navgrid=navgrid,
+        people=crowd.positions(np.array([0.0]))[0],
     )
     summary = {
         "havln_mj": __version__,
@@ -241,6 +292,11 @@ def run(args: argparse.Namespace) -> dict:
         "resolution": [args.width, args.height],
         "vfov_deg": args.vfov,
         "collision": world.collision,
+        "people": [
+            {"activity": p.activity, "text": p.text, "region": p.region, "viewpoint": p.viewpoint}
+            for p in crowd.people
+        ],
+        "human_collisions": sum(r["human_collisions"] for r in records),
         "episodes": records,
         "steps": sum(r["steps"] for r in records),
         "frames": frames,

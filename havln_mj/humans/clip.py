@@ -84,6 +84,17 @@ class Clip:
         # The loop wraps from the last frame back to loop_start, so a loop spans `period`.
         return np.where(f <= last, np.maximum(f, 0.0), start + np.mod(f - start, period))
 
+    def blend_frames(self, t: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The two frames around times ``t`` and the weight of the second: ``(i0, i1, w)``."""
+        f = self.frame_time(t)
+        i0 = np.floor(f).astype(int)
+        return i0, np.minimum(i0 + 1, self.frames - 1), f - i0
+
+    def root_at(self, t: np.ndarray | float) -> np.ndarray:
+        """Pelvis positions ``(..., 3)`` at times ``t`` (cheaper than a full ``sample``)."""
+        i0, i1, w = self.blend_frames(t)
+        return self.root[i0] + w[..., None] * (self.root[i1] - self.root[i0])
+
     def sample(self, t: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
         """Pose at times ``t`` (any shape).
 
@@ -91,10 +102,7 @@ class Clip:
             ``(local or positions, root)``: local rotations ``(..., 24, 4)`` (or joint
             positions ``(..., 24, 3)`` in segment mode) and pelvis positions ``(..., 3)``.
         """
-        f = self.frame_time(t)
-        i0 = np.floor(f).astype(int)
-        i1 = np.minimum(i0 + 1, self.frames - 1)
-        w = f - i0
+        i0, i1, w = self.blend_frames(t)
         root = self.root[i0] + w[..., None] * (self.root[i1] - self.root[i0])
         if self.local is not None:
             return rot.slerp(self.local[i0], self.local[i1], w[..., None]), root

@@ -27,19 +27,38 @@ def identity(shape: tuple[int, ...] = ()) -> np.ndarray:
     return q
 
 
+def _hamilton_table() -> np.ndarray:
+    """``T`` with ``(a ⊗ b)_i = Σ_jk T[i, j, k] a_j b_k``."""
+    t = np.zeros((4, 4, 4))
+    for (j, k), (i, sign) in {
+        (0, 0): (0, 1), (0, 1): (1, 1), (0, 2): (2, 1), (0, 3): (3, 1),
+        (1, 0): (1, 1), (1, 1): (0, -1), (1, 2): (3, 1), (1, 3): (2, -1),
+        (2, 0): (2, 1), (2, 1): (3, -1), (2, 2): (0, -1), (2, 3): (1, 1),
+        (3, 0): (3, 1), (3, 1): (2, 1), (3, 2): (1, -1), (3, 3): (0, -1),
+    }.items():  # fmt: skip
+        t[i, j, k] = sign
+    return t
+
+
+_HAMILTON = _hamilton_table()
+_HAMILTON_FLAT = _HAMILTON.reshape(4, 16).T.copy()
+_LEVI_CIVITA = np.zeros((3, 3, 3))
+for _i, _j, _k in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+    _LEVI_CIVITA[_i, _j, _k], _LEVI_CIVITA[_i, _k, _j] = 1.0, -1.0
+
+
 def mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Hamilton product ``a ⊗ b`` (rotate by ``b``, then by ``a``)."""
-    aw, ax, ay, az = np.moveaxis(np.asarray(a, float), -1, 0)
-    bw, bx, by, bz = np.moveaxis(np.asarray(b, float), -1, 0)
-    return np.stack(
-        [
-            aw * bw - ax * bx - ay * by - az * bz,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-        ],
-        axis=-1,
+    # An outer product and one matmul beat sixteen small array products by far.
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    outer = (a[..., :, None] * b[..., None, :]).reshape(
+        *np.broadcast_shapes(a.shape, b.shape)[:-1], 16
     )
+    return outer @ _HAMILTON_FLAT
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.einsum("ijk,...j,...k->...i", _LEVI_CIVITA, a, b)
 
 
 def conj(q: np.ndarray) -> np.ndarray:
@@ -52,8 +71,8 @@ def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
     q = np.asarray(q, float)
     v = np.asarray(v, float)
     w, u = q[..., :1], q[..., 1:]
-    t = 2.0 * np.cross(u, v)
-    return v + w * t + np.cross(u, t)
+    t = 2.0 * _cross(u, v)
+    return v + w * t + _cross(u, t)
 
 
 def from_axis_angle(aa: np.ndarray) -> np.ndarray:
@@ -83,17 +102,36 @@ def from_axis(axis: np.ndarray | tuple, angle: np.ndarray | float) -> np.ndarray
     return np.concatenate([np.cos(half), np.sin(half) * axis], axis=-1)
 
 
+def _matrix_table() -> np.ndarray:
+    """``C`` with ``R_ij = Σ_kl C[i, j, k, l] q_k q_l`` for unit ``q`` (homogeneous form)."""
+    c = np.zeros((3, 3, 4, 4))
+    w, x, y, z = range(4)
+    for (i, j), terms in {
+        (0, 0): ((w, w, 1), (x, x, 1), (y, y, -1), (z, z, -1)),
+        (1, 1): ((w, w, 1), (x, x, -1), (y, y, 1), (z, z, -1)),
+        (2, 2): ((w, w, 1), (x, x, -1), (y, y, -1), (z, z, 1)),
+        (0, 1): ((x, y, 2), (w, z, -2)),
+        (1, 0): ((x, y, 2), (w, z, 2)),
+        (0, 2): ((x, z, 2), (w, y, 2)),
+        (2, 0): ((x, z, 2), (w, y, -2)),
+        (1, 2): ((y, z, 2), (w, x, -2)),
+        (2, 1): ((y, z, 2), (w, x, 2)),
+    }.items():
+        for k, m, v in terms:
+            c[i, j, k, m] = v
+    return c
+
+
+_MATRIX_FLAT = _matrix_table().reshape(9, 16).T.copy()
+
+
 def to_matrix(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices ``(..., 3, 3)`` of quaternions."""
-    w, x, y, z = np.moveaxis(normalize(q), -1, 0)
-    return np.stack(
-        [
-            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-        ],
-        axis=-2,
-    )
+    """Rotation matrices ``(..., 3, 3)`` of (not necessarily unit) quaternions."""
+    q = np.asarray(q, float)
+    # The quadratic form divided by |q|² is the rotation of q / |q|: one matmul, no stacking.
+    outer = (q[..., :, None] * q[..., None, :]).reshape(*q.shape[:-1], 16)
+    m = (outer @ _MATRIX_FLAT) / np.sum(q * q, axis=-1, keepdims=True)
+    return m.reshape(*q.shape[:-1], 3, 3)
 
 
 def from_matrix(m: np.ndarray) -> np.ndarray:

@@ -117,10 +117,24 @@ def offsets_from_positions(positions: np.ndarray) -> np.ndarray:
     return off
 
 
+def _depth_levels() -> list[np.ndarray]:
+    """Joints grouped by depth in the tree (pelvis excluded): parents come a level earlier."""
+    depth = np.zeros(NUM_JOINTS, dtype=int)
+    for j in range(1, NUM_JOINTS):
+        depth[j] = depth[PARENTS[j]] + 1
+    return [np.flatnonzero(depth == d) for d in range(1, depth.max() + 1)]
+
+
+_LEVELS = _depth_levels()
+
+
 def forward_kinematics(
     offsets: np.ndarray, local: np.ndarray, root: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """World joint positions and orientations from local rotations.
+
+    Joints of one tree depth are computed together (8 levels for 23 joints), vectorised over
+    the leading dimensions; positions go through rotation matrices (one matmul per level).
 
     Args:
         offsets: Rest offsets ``(24, 3)`` (or ``(..., 24, 3)`` per person); row 0 is ignored.
@@ -134,12 +148,15 @@ def forward_kinematics(
     offsets = np.broadcast_to(np.asarray(offsets, float), (*local.shape[:-1], 3))
     pos = np.empty((*local.shape[:-1], 3))
     quat = np.empty_like(local)
+    mats = rot.to_matrix(local)
     pos[..., 0, :] = root
     quat[..., 0, :] = local[..., 0, :]
-    for j in range(1, NUM_JOINTS):
-        p = PARENTS[j]
-        quat[..., j, :] = rot.mul(quat[..., p, :], local[..., j, :])
-        pos[..., j, :] = pos[..., p, :] + rot.rotate(quat[..., p, :], offsets[..., j, :])
+    for level in _LEVELS:
+        parent = PARENTS[level]
+        mp = mats[..., parent, :, :]
+        pos[..., level, :] = pos[..., parent, :] + (mp @ offsets[..., level, :, None])[..., 0]
+        mats[..., level, :, :] = mp @ mats[..., level, :, :]
+        quat[..., level, :] = rot.mul(quat[..., parent, :], local[..., level, :])
     return pos, quat
 
 

@@ -331,6 +331,48 @@ class Camera:
         depth_out = self._linear_depth() if depth else None
         return Frame(rgb=rgb_out, depth=depth_out)
 
+    def upload_mesh(self, mesh_id: int) -> None:
+        """Re-sends a mesh whose vertices changed in the model to this camera's GL context."""
+        if self._closed or self._ctx is None or self._handle is None:
+            raise RuntimeError("upload_mesh() called on a closed Camera")
+        self._handle.make_current()
+        mujoco.mjr_uploadMesh(self._model, self._ctx, int(mesh_id))
+
+    def render_geom_ids(self, data: mujoco.MjData) -> np.ndarray:
+        """Which model geom each pixel shows: ``(H, W)`` ``int32``, −1 where none.
+
+        A second pass with MuJoCo's segmentation colouring (each drawn geom in a unique flat
+        colour), decoded back to geom ids. Same preconditions as :meth:`render`.
+        """
+        if self._closed or self._ctx is None or self._handle is None:
+            raise RuntimeError("render_geom_ids() called on a closed Camera")
+        self._handle.make_current()
+        self._model.cam_fovy[self._cam_id] = self._vfov
+        mujoco.mjv_updateScene(
+            self._model, data, self._option, None, self._mjv_cam, _CATMASK, self._scene
+        )
+        flags = self._scene.flags
+        segment, idcolor = (
+            int(mujoco.mjtRndFlag.mjRND_SEGMENT),
+            int(mujoco.mjtRndFlag.mjRND_IDCOLOR),
+        )
+        flags[segment] = flags[idcolor] = 1
+        try:
+            mujoco.mjr_setBuffer(_OFFSCREEN, self._ctx)
+            mujoco.mjr_render(self._rect, self._scene, self._ctx)
+            mujoco.mjr_readPixels(self._rgb_raw, None, self._rect, self._ctx)
+        finally:
+            flags[segment] = flags[idcolor] = 0
+        rgb = self._rgb_raw[::-1].astype(np.int32)
+        seg = rgb[..., 0] + (rgb[..., 1] << 8) + (rgb[..., 2] << 16) - 1  # scene geom index
+        geom = int(mujoco.mjtObj.mjOBJ_GEOM)
+        lookup = np.array(
+            [g.objid if g.objtype == geom else -1 for g in self._scene.geoms[: self._scene.ngeom]]
+            + [-1],
+            dtype=np.int32,
+        )
+        return lookup[np.where((seg >= 0) & (seg < len(lookup) - 1), seg, -1)]
+
     def _linear_depth(self) -> np.ndarray:
         """Converts the reversed-z buffer (1 near, 0 far) to planar metres; 0 where empty."""
         cam = self._scene.camera[0]

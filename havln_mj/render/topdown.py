@@ -1,4 +1,4 @@
-"""Top-down maps: floor plan (regions and a horizontal section of the mesh), graph, paths."""
+"""Top-down maps: floor plan (regions, a horizontal section of the mesh), graph, paths, people."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import trimesh
 from matplotlib.collections import LineCollection
-from matplotlib.patches import Polygon, Rectangle
+from matplotlib.patches import Circle, Polygon, Rectangle
 
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.navgrid import NavGrid
@@ -36,6 +36,7 @@ def draw_topdown(
     level_floor: float = 0.0,
     title: str = "",
     navgrid: NavGrid | None = None,
+    people: np.ndarray | None = None,
 ) -> None:
     """Writes a PNG map of one level.
 
@@ -49,6 +50,8 @@ def draw_topdown(
         title: Figure title.
         navgrid: Navigability grid of the level, shaded under the plan (blocked cells red
             where only the robot's radius blocks them, grey where geometry is).
+        people: Pelvis positions ``(N, 3)`` of people to mark, each with its 1 m collision
+            circle (those on other levels are skipped).
     """
     fig, ax = plt.subplots(figsize=(9, 9), dpi=110)
     cmap = plt.get_cmap("tab20")
@@ -86,6 +89,11 @@ def draw_topdown(
         ax.plot(pts[:, 0], pts[:, 1], "-", c=c, lw=2.2, zorder=4)
         ax.plot(*pts[0], "o", c=c, ms=9, mfc="white", mew=2, zorder=5)
         ax.plot(*pts[-1], "*", c=c, ms=14, zorder=5)
+    if people is not None:
+        for x, y, z in np.asarray(people).reshape(-1, 3):
+            if -0.2 < z - level_floor < 1.6:
+                ax.add_patch(Circle((x, y), 1.0, fc=(1.0, 0.5, 0.0, 0.15), ec="#ff7f0e", lw=0.8))
+                ax.plot(x, y, "P", c="#ff7f0e", ms=9, mec="black", mew=0.6, zorder=6)
     ax.set_aspect("equal")
     ax.autoscale_view()
     ax.set_xlabel("x (m)")

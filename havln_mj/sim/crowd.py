@@ -1,7 +1,8 @@
 """The people in a scene, as the simulator needs them, and the HA-VLN collision signal.
 
-The simulator asks a crowd only where each person's pelvis is at given simulated times; the
-humans package fills scenes with people by implementing :class:`Crowd`. A scene without
+The simulator asks a crowd where each person's pelvis is at given simulated times (for the
+collision signal), their full pose at one time (for drawing) and their states; the humans
+package (:class:`havln_mj.humans.crowd.Crowd`) implements :class:`Crowd`. A scene without
 people uses :data:`NO_CROWD`.
 
 Collision (the HA-VLN signal): the agent is within ``distance`` (default 1 m) of a person,
@@ -29,8 +30,30 @@ class Crowd(Protocol):
         """Number of people."""
         ...
 
+    @property
+    def shapes(self) -> list:
+        """Each person's body (``havln_mj.humans.body.BodyShape``), for drawing."""
+        ...
+
+    @property
+    def skins(self) -> list:
+        """Each person's SMPL skin (``havln_mj.humans.skinned.Skin``) or None."""
+        ...
+
     def positions(self, times: np.ndarray) -> np.ndarray:
         """Pelvis positions ``(len(times), len(self), 3)`` at the given simulated seconds."""
+        ...
+
+    def skin_vertices(self, t: float) -> dict:
+        """World mesh vertices of each skinned person at ``t``, by person index."""
+        ...
+
+    def pose(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """World joint positions ``(N, 24, 3)`` and orientations ``(N, 24, 4)`` at ``t``."""
+        ...
+
+    def states(self, t: float) -> list:
+        """Each person's state at ``t`` (position, heading, velocity, activity, region)."""
         ...
 
 
@@ -40,8 +63,25 @@ class _NoCrowd:
     def __len__(self) -> int:
         return 0
 
+    @property
+    def shapes(self) -> list:
+        return []
+
+    @property
+    def skins(self) -> list:
+        return []
+
+    def skin_vertices(self, t: float) -> dict:
+        return {}
+
     def positions(self, times: np.ndarray) -> np.ndarray:
         return np.zeros((len(np.atleast_1d(times)), 0, 3))
+
+    def pose(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        return np.zeros((0, 24, 3)), np.zeros((0, 24, 4))
+
+    def states(self, t: float) -> list:
+        return []
 
 
 NO_CROWD: Crowd = _NoCrowd()

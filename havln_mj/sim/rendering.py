@@ -2,7 +2,9 @@
 
 MatterSim hands out BGR ``uint8`` colour and ``uint16`` depth in 0.25 mm units (planar
 z-distance, 0 = no reading, so anything beyond 16.38 m reads 0). Users who prefer RGB or
-``float32`` metres ask the simulator for them.
+``float32`` metres ask the simulator for them. People are posed at the element's simulated
+time before each frame, so they appear in colour and depth; the human mask (which pixels
+show a person) takes a second, segmentation pass and is drawn only when asked for.
 """
 
 from __future__ import annotations
@@ -13,9 +15,13 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from havln_mj.render.camera import Camera, Frame
+from havln_mj import groups
+from havln_mj.humans.mujoco_people import PeopleWriter
+from havln_mj.humans.skinned import SkinWriter
+from havln_mj.render.camera import Camera
 from havln_mj.robot.point_body import CAMERA, PointBody
 from havln_mj.scene.scan import Scan
+from havln_mj.sim.crowd import NO_CROWD, Crowd
 from havln_mj.sim.world import WorldOptions, build_world
 
 DEPTH_UNITS_PER_M = 4000.0  # MatterSim / Matterport depth: 0.25 mm per unit
@@ -37,6 +43,7 @@ class ViewSettings:
     height: int
     vfov: float
     depth: bool
+    human_mask: bool = False
 
 
 def depth_to_mattersim(depth_m: np.ndarray) -> np.ndarray:
@@ -46,12 +53,28 @@ def depth_to_mattersim(depth_m: np.ndarray) -> np.ndarray:
     return units.astype(np.uint16)[..., None]
 
 
-class SceneView:
-    """A scan's world with the point-body camera, rendered at one agent pose at a time."""
+@dataclass(frozen=True)
+class View:
+    """One rendered view: colour, depth in metres (or None) and the human mask (or None)."""
 
-    def __init__(self, scan: Scan, options: WorldOptions) -> None:
-        self.world = build_world(scan, options)
+    rgb: np.ndarray
+    depth: np.ndarray | None
+    human_mask: np.ndarray | None
+
+
+class SceneView:
+    """A scan's world with its people and the point-body camera, rendered one pose at a time."""
+
+    def __init__(self, scan: Scan, options: WorldOptions, crowd: Crowd = NO_CROWD) -> None:
+        self.crowd = crowd
+        shapes = crowd.shapes
+        skins = crowd.skins
+        self.world = build_world(scan, options, shapes, skins)
         self.data = mujoco.MjData(self.world.model)
+        self._people = PeopleWriter(self.world.model, len(shapes))
+        skinned = [k for k, s in enumerate(skins) if s is not None]
+        self._skins = SkinWriter(self.world.model, skinned) if skinned else None
+        self._human_geoms = self.world.model.geom_group == groups.HUMANS
         self._body = PointBody(np.zeros(3))
         self._camera: Camera | None = None
         self._settings: ViewSettings | None = None
@@ -83,12 +106,23 @@ class SceneView:
             self._camera.set_vfov(math.degrees(settings.vfov))
         self._settings = settings
 
-    def render(self, position: np.ndarray, heading: float, elevation: float) -> Frame:
-        """Renders the view from a camera pose (metres, radians)."""
+    def render(self, position: np.ndarray, heading: float, elevation: float, t: float) -> View:
+        """Renders the view from a camera pose (metres, radians) at simulated time ``t``."""
         assert self._camera is not None and self._settings is not None, "configure() first"
+        if self._people.n_people:
+            self._people.write(self.data, *self.crowd.pose(t))
+        if self._skins is not None:
+            verts = self.crowd.skin_vertices(t)
+            for mesh in self._skins.write(self.world.model, self.data, verts):
+                self._camera.upload_mesh(mesh)
         self._body.set_pose(position, heading, elevation)
-        self._body.write(self.world.model, self.data)
-        return self._camera.render(self.data, rgb=True, depth=self._settings.depth)
+        self._body.write(self.world.model, self.data)  # runs kinematics for everything
+        frame = self._camera.render(self.data, rgb=True, depth=self._settings.depth)
+        mask = None
+        if self._settings.human_mask:
+            ids = self._camera.render_geom_ids(self.data)
+            mask = (ids >= 0) & self._human_geoms[np.maximum(ids, 0)]
+        return View(frame.rgb, frame.depth, mask)
 
     def close(self) -> None:
         """Releases the camera's GL resources."""

@@ -18,6 +18,7 @@ from havln_mj.scene.ids import parse_scene_id
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.realscan import CONNECTIVITY_HOW_TO, resolve_connectivity_dir
 from havln_mj.scene.scan import Scan, known_scene_ids, load_scan
+from havln_mj.sim.crowd import NO_CROWD, Crowd
 from havln_mj.sim.navigation import NavTable
 from havln_mj.sim.rendering import SceneView, ViewSettings
 from havln_mj.sim.world import WorldOptions
@@ -105,11 +106,11 @@ class SceneLibrary:
             self._scans[scan_id] = scan
         return scan
 
-    def view(self, scan_id: str, settings: ViewSettings) -> SceneView:
-        """The renderable world of ``scan_id``, configured to ``settings``."""
+    def view(self, scan_id: str, settings: ViewSettings, crowd: Crowd = NO_CROWD) -> SceneView:
+        """The renderable world of ``scan_id`` with ``crowd``'s people, set to ``settings``."""
         view = self._views.get(scan_id)
         if view is None:
-            view = SceneView(self.scan(scan_id), self._world_options)
+            view = SceneView(self.scan(scan_id), self._world_options, crowd)
             self._views[scan_id] = view
             while len(self._views) > self._cache_size:
                 _, old = self._views.popitem(last=False)
@@ -118,16 +119,6 @@ class SceneLibrary:
             self._views.move_to_end(scan_id)
         view.configure(settings)
         return view
-
-    def preload(self, settings: ViewSettings | None) -> None:
-        """Loads every graph of the navigation-graph folder.
-
-        Given view settings, it also builds the worlds of the first ``cache_size`` scans.
-        """
-        for k, scan_id in enumerate(self.connectivity_ids()):
-            self.table(scan_id)
-            if settings is not None and k < self._cache_size:
-                self.view(scan_id, settings)
 
     def close(self) -> None:
         """Releases every world's renderer."""

@@ -5,9 +5,11 @@ setters, batched list arguments, ``initialize``/``newEpisode``/``makeAction``/``
 navigable-location rules, discretised views and exception types (see
 ``reference/mattersim_api.md`` for the rules). On top of MatterSim:
 
-* **People** (HA3D): ``state.isCrushed`` is 1 when the agent came within the collision
+* **People** (HA3D): with ``Simulator(humans=True)`` every scan is populated (see
+  :mod:`havln_mj.sim.people`); people move with simulated time and are drawn in RGB, depth and
+  an optional human mask. ``state.isCrushed`` is 1 when the agent came within the collision
   distance of a person at any time during the last action, in every mode (HA3D computed it
-  only with rendering off); ``getHumanState()`` gives everyone's position.
+  only with rendering off); ``getHumanState()`` gives everyone's state.
 * **Clock**: every action advances the element's simulated time (``state.time``) by its
   duration: the move at ``speed`` m/s, then the turn at ``turn_rate`` rad/s (the larger of
   the heading and elevation change); an action that neither moves nor turns is a wait of
@@ -99,6 +101,7 @@ class _Settings:
     seed: int = 1
     color_order: str = "BGR"
     depth_units: str = "mattersim"
+    human_mask: bool = False
     world_options: WorldOptions = field(default_factory=lambda: WorldOptions(collision="none"))
 
 
@@ -164,7 +167,8 @@ class Simulator:
     def __init__(
         self,
         *,
-        crowds: CrowdFactory | None = None,
+        humans: bool | CrowdFactory = False,
+        human_placements: Path | str | None = None,
         speed: float = DEFAULT_SPEED,
         turn_rate: float = DEFAULT_TURN_RATE,
         collision_distance: float = COLLISION_DISTANCE,
@@ -172,8 +176,10 @@ class Simulator:
         """Creates an uninitialised simulator with MatterSim's default settings.
 
         Args:
-            crowds: Makes the people of a scan from ``(scan id, graph, generator)``; None
-                means scenes without people.
+            humans: Whether scans have people (HA3D's placement rule), or a function making
+                a scan's crowd from ``(scan id, graph, generator)``.
+            human_placements: HA3D placement file for the real scans (default
+                ``$HAVLN_HA3D_PLACEMENTS``); used when ``humans`` is True.
             speed: Agent speed for the clock (m/s).
             turn_rate: Agent turning rate for the clock (rad/s).
             collision_distance: HA-VLN's collision threshold (metres, horizontal).
@@ -185,7 +191,11 @@ class Simulator:
         ):
             if not (isinstance(value, numbers.Real) and math.isfinite(value) and value > 0):
                 raise InvalidArgumentError(f"{name} must be a positive number, got {value!r}")
-        self._crowds = crowds
+        if not (isinstance(humans, bool) or callable(humans)):
+            raise InvalidArgumentError(f"humans must be a bool or a crowd factory, got {humans!r}")
+        self._humans = humans
+        self._human_placements = human_placements
+        self._crowds: CrowdFactory | None = None
         self._speed = float(speed)
         self._turn_rate = float(turn_rate)
         self._collision_distance = float(collision_distance)
@@ -294,6 +304,10 @@ class Simulator:
             raise InvalidArgumentError(f"depth units {units!r}; valid: {DEPTH_UNITS}")
         self._set("depth_units", units)
 
+    def set_human_mask_enabled(self, value: bool) -> None:
+        """Whether states carry ``humanMask`` (a second, segmentation pass per frame)."""
+        self._set("human_mask", _check_bool("set_human_mask_enabled", value))
+
     def set_world_options(self, options: WorldOptions) -> None:
         """How rendered worlds are built.
 
@@ -314,9 +328,19 @@ class Simulator:
         self._rng = np.random.default_rng(cfg.seed)
         self._agents = []
         self._crowd_of = {}
+        if self._humans is True:
+            from havln_mj.sim.people import HumanCrowds  # the humans package, only when used
+
+            self._crowds = HumanCrowds(self._library.scan, self._human_placements)
+        else:
+            self._crowds = self._humans or None
         self._initialized = True
         if cfg.preloading:
-            self._library.preload(self._view_settings() if cfg.rendering else None)
+            # Every graph of the folder; with rendering, worlds too, up to the cache size.
+            for k, scan_id in enumerate(self._library.connectivity_ids()):
+                table = self._library.table(scan_id)
+                if cfg.rendering and k < cfg.cache_size:
+                    self._library.view(scan_id, self._view_settings(), self._crowd(table))
 
     def close(self) -> None:
         """Releases renderers; the simulator can be initialised again."""
@@ -538,7 +562,7 @@ class Simulator:
 
     def _view_settings(self) -> ViewSettings:
         cfg = self._cfg
-        return ViewSettings(cfg.width, cfg.height, cfg.vfov, cfg.depth)
+        return ViewSettings(cfg.width, cfg.height, cfg.vfov, cfg.depth, cfg.human_mask)
 
     def _blank_images(self) -> tuple[np.ndarray, np.ndarray]:
         """Shared read-only zero images for states that are not rendered."""
@@ -551,14 +575,14 @@ class Simulator:
             self._blank = (rgb, depth)
         return self._blank
 
-    def _images(self, a: _Agent) -> tuple[np.ndarray, np.ndarray]:
+    def _images(self, a: _Agent) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         cfg = self._cfg
         if not cfg.rendering:
-            return self._blank_images()
+            return (*self._blank_images(), None)
         t0 = time.perf_counter()
-        view = self._library.view(a.table.scan_id, self._view_settings())
+        view = self._library.view(a.table.scan_id, self._view_settings(), a.crowd)
         here = a.navigable[0]
-        frame = view.render(np.array([here.x, here.y, here.z]), a.heading, a.elevation)
+        frame = view.render(np.array([here.x, here.y, here.z]), a.heading, a.elevation, a.time)
         rgb = frame.rgb if cfg.color_order == "RGB" else np.ascontiguousarray(frame.rgb[..., ::-1])
         if frame.depth is None:
             depth = self._blank_images()[1]
@@ -568,12 +592,12 @@ class Simulator:
             depth = depth_to_mattersim(frame.depth)
         self._timers["render"] += time.perf_counter() - t0
         self._timers["frames"] += 1
-        return rgb, depth
+        return rgb, depth, frame.human_mask
 
     def _publish(self, which: Sequence[int], near: Sequence[Proximity]) -> None:
         for i, contact in zip(which, near, strict=True):
             a = self._agents[i]
-            rgb, depth = self._images(a)
+            rgb, depth, mask = self._images(a)
             a.state = SimState(
                 a.table.scan_id,
                 a.step,
@@ -588,6 +612,7 @@ class Simulator:
                 int(contact.crushed),
                 contact.people,
                 contact.min_distance,
+                mask,
             )
 
     def getState(self) -> list[SimState]:  # noqa: N802
@@ -600,11 +625,15 @@ class Simulator:
             raise NotInitializedError("getState called before newEpisode()")
         return [a.state for a in self._agents]
 
-    def getHumanState(self) -> list[np.ndarray]:  # noqa: N802
-        """Each element's people: ``(N, 3)`` pelvis positions at the element's time."""
+    def getHumanState(self) -> list[list]:  # noqa: N802
+        """Each element's people at the element's time: a list of states per element.
+
+        A state (:class:`havln_mj.humans.crowd.PersonState`) has ``position`` (pelvis),
+        ``heading``, ``velocity``, ``activity``, ``text`` and ``region``.
+        """
         if not self._agents:
             raise NotInitializedError("getHumanState called before newEpisode()")
-        return [a.crowd.positions(np.array([a.time]))[0] for a in self._agents]
+        return [a.crowd.states(a.time) for a in self._agents]
 
     # ------------------------------------------------------------------ timing
 

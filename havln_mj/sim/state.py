@@ -82,6 +82,8 @@ class SimState:
         crushedBy: Indices of those people in ``getHumanState()``.
         minHumanDistance: Smallest horizontal distance to a person during the last action
             (metres; ``inf`` in a scene without people).
+        humanMask: H×W ``bool``, True where a person is seen; None unless the human mask is
+            enabled (and rendering is on).
     """
 
     __slots__ = (
@@ -89,6 +91,7 @@ class SimState:
         "depth",
         "elevation",
         "heading",
+        "humanMask",
         "isCrushed",
         "location",
         "minHumanDistance",
@@ -115,6 +118,7 @@ class SimState:
         isCrushed: int = 0,  # noqa: N803
         crushedBy: tuple[int, ...] = (),  # noqa: N803
         minHumanDistance: float = float("inf"),  # noqa: N803
+        humanMask: np.ndarray | None = None,  # noqa: N803
     ) -> None:
         self.scanId = scanId
         self.step = step
@@ -129,6 +133,7 @@ class SimState:
         self.isCrushed = isCrushed
         self.crushedBy = crushedBy
         self.minHumanDistance = minHumanDistance
+        self.humanMask = humanMask
 
     def __repr__(self) -> str:
         return (

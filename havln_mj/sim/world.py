@@ -9,6 +9,7 @@ Lighting is a soft headlight plus two directional lights, shadows off.
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import mujoco
@@ -17,6 +18,9 @@ import trimesh
 
 from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
+from havln_mj.humans.body import BodyShape
+from havln_mj.humans.mujoco_people import add_people
+from havln_mj.humans.skinned import Skin
 from havln_mj.robot.point_body import add_point_body
 from havln_mj.scene.collision import CoacdParams, decompose
 from havln_mj.scene.scan import Scan, floor_heights
@@ -207,17 +211,26 @@ def world_spec(scan: Scan, options: WorldOptions | None = None) -> tuple[mujoco.
     return spec, mode, n
 
 
-def build_world(scan: Scan, options: WorldOptions | None = None) -> World:
+def build_world(
+    scan: Scan,
+    options: WorldOptions | None = None,
+    people: Sequence[BodyShape] = (),
+    skins: Sequence[Skin | None] = (),
+) -> World:
     """Compiles a scan into a MuJoCo model with the point-body agent and its camera.
 
     Args:
         scan: The building.
         options: Build options (collision mode, CoACD parameters, buffer size, camera FOV).
+        people: Bodies of the scene's people (mocap bodies ``human<k>/<joint>``, parked
+            until posed; see :mod:`havln_mj.humans.mujoco_people`).
+        skins: Per person, an SMPL skin to draw instead of the built-in body (or None).
 
     Returns:
         The compiled world.
     """
     t0 = time.perf_counter()
     spec, mode, n = world_spec(scan, options)
+    add_people(spec, list(people), skins)
     model = spec.compile()
     return World(model, scan, mode, n, time.perf_counter() - t0)

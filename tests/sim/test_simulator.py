@@ -169,8 +169,19 @@ class _Standing:
     def __len__(self):
         return len(self.points)
 
+    @property
+    def shapes(self):
+        return []
+
+    @property
+    def skins(self):
+        return []
+
     def positions(self, times):
         return np.broadcast_to(self.points, (len(times), *self.points.shape)).copy()
+
+    def states(self, t):
+        return [tuple(p) for p in self.points]
 
 
 def test_is_crushed_catches_a_person_passed_mid_action(graph):
@@ -179,7 +190,7 @@ def test_is_crushed_catches_a_person_passed_mid_action(graph):
     pa, pb = graph.position(a), graph.position(b)
     side = np.array([pa[1] - pb[1], pb[0] - pa[0], 0.0])
     person = (pa + pb) / 2 + 0.4 * side / np.linalg.norm(side) - [0.0, 0.0, 0.5]
-    sim = _sim(crowds=lambda scan, g, rng: _Standing([person]))
+    sim = _sim(humans=lambda scan, g, rng: _Standing([person]))
     sim.newEpisode([SCAN], [a], [heading_to(pa, pb)], [0.0])
     start = sim.getState()[0]
     assert start.isCrushed == 0  # both ends are more than 1 m away
@@ -189,8 +200,7 @@ def test_is_crushed_catches_a_person_passed_mid_action(graph):
     assert state.isCrushed == 1 and state.crushedBy == (0,)
     # Sampled at 16 Hz at 1 m/s: a sample falls within 3.2 cm of the closest point.
     assert 0.4 - 1e-9 <= state.minHumanDistance <= math.hypot(0.4, 0.032)
-    people = sim.getHumanState()[0]
-    assert people.shape == (1, 3)
+    assert sim.getHumanState() == [[tuple(person)]]
     sim.makeAction([0], [0.0], [0.0])  # waiting at b, far from the person
     assert sim.getState()[0].isCrushed == int(np.hypot(*(pb - person)[:2]) <= 1.0)
 
@@ -200,7 +210,7 @@ def test_scenes_without_people_report_no_collision():
     sim.newRandomEpisode([SCAN])
     state = sim.getState()[0]
     assert state.isCrushed == 0 and state.minHumanDistance == math.inf
-    assert sim.getHumanState()[0].shape == (0, 3)
+    assert sim.getHumanState() == [[]]
 
 
 def test_egocentric_actions(graph):
