@@ -28,7 +28,7 @@ from havln_mj.errors import HavlnError, InvalidArgumentError
 from havln_mj.frames import heading_to, wrap_angle
 from havln_mj.humans.crowd import Crowd
 from havln_mj.humans.mujoco_people import PeopleWriter
-from havln_mj.humans.population import populate
+from havln_mj.humans.skinned import SkinWriter
 from havln_mj.render.camera import Camera
 from havln_mj.render.topdown import draw_topdown
 from havln_mj.robot.point_body import CAMERA, PointBody
@@ -38,6 +38,7 @@ from havln_mj.scene.navgrid import NavGrid
 from havln_mj.scene.procedural.recipe import load_recipe
 from havln_mj.scene.scan import known_scene_ids, load_scan
 from havln_mj.sim.crowd import COLLISION_DISTANCE, SAMPLE_HZ, Proximity, proximity
+from havln_mj.sim.people import HumanCrowds
 from havln_mj.sim.world import COLLISION_MODES, WorldOptions, build_world
 
 
@@ -141,6 +142,24 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--collision", choices=COLLISION_MODES, default="auto")
     p.add_argument("--no-people", action="store_true", help="leave the scene empty")
     p.add_argument(
+        "--human-placements",
+        type=Path,
+        default=None,
+        help="HA3D placement file for real scans (default $HAVLN_HA3D_PLACEMENTS)",
+    )
+    p.add_argument(
+        "--haps-dir",
+        type=Path,
+        default=None,
+        help="HAPS motion folder to play instead of built-in motions (default $HAVLN_HAPS_DIR)",
+    )
+    p.add_argument(
+        "--smpl-model",
+        type=Path,
+        default=None,
+        help="SMPL model file to draw people as skinned meshes (default $HAVLN_SMPL_MODEL)",
+    )
+    p.add_argument(
         "--mp3d-dir",
         type=Path,
         default=None,
@@ -172,7 +191,10 @@ def run(args: argparse.Namespace) -> dict:
     scan = load_scan(scene, mp3d_dir=args.mp3d_dir, connectivity_dir=args.connectivity_dir)
     t_scan = time.perf_counter() - t0
     print(f"havln_mj {__version__}: {scan.description}", flush=True)
-    crowd = Crowd([]) if args.no_people else populate(scan, np.random.default_rng([args.seed, 1]))
+    crowd = Crowd([])
+    if not args.no_people:
+        make = HumanCrowds(lambda _: scan, args.human_placements, args.haps_dir, args.smpl_model)
+        crowd = make(scan.scene_id, scan.graph, np.random.default_rng([args.seed, 1]))
     print(f"people: {len(crowd)}", *(f"{p.text} ({p.region})" for p in crowd.people), sep="\n  ")
     world = build_world(
         scan,
@@ -199,6 +221,8 @@ def run(args: argparse.Namespace) -> dict:
     if not writer.isOpened():
         raise HavlnError(f"cannot open an MP4 writer for {video_path}")
     people = PeopleWriter(model, len(crowd))
+    skinned = [k for k, skin in enumerate(crowd.skins) if skin is not None]
+    skins = SkinWriter(model, skinned) if skinned else None
     human_geom = model.geom_group == groups.HUMANS
     records, render_s, frames, clock = [], 0.0, 0, 0.0
     best_detail, best_frame = -1.0, None
@@ -212,6 +236,10 @@ def run(args: argparse.Namespace) -> dict:
             for sim_t in walk(body, graph, ep.path, args.fps):
                 track.append((clock + sim_t, *body.position))
                 people.write(data, *crowd.pose(clock + sim_t))
+                if skins is not None:
+                    verts = crowd.skin_vertices(clock + sim_t)
+                    for mesh in skins.write(model, data, verts):
+                        cam.upload_mesh(mesh)
                 body.write(model, data)
                 t0 = time.perf_counter()
                 rgb = cam.render(data, depth=False).rgb

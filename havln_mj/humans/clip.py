@@ -86,6 +86,13 @@ class Clip:
 
     def blend_frames(self, t: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The two frames around times ``t`` and the weight of the second: ``(i0, i1, w)``."""
+        if isinstance(t, float):  # one instant, every frame of playback: plain arithmetic
+            f, last, start = t * self.fps, self.frames - 1, self.loop_start
+            if f > last and last > start:
+                f = start + (f - start) % (last - start)
+            f = min(max(f, 0.0), float(last))
+            i0 = int(f)
+            return i0, min(i0 + 1, last), f - i0
         f = self.frame_time(t)
         i0 = np.floor(f).astype(int)
         return i0, np.minimum(i0 + 1, self.frames - 1), f - i0
@@ -93,6 +100,7 @@ class Clip:
     def root_at(self, t: np.ndarray | float) -> np.ndarray:
         """Pelvis positions ``(..., 3)`` at times ``t`` (cheaper than a full ``sample``)."""
         i0, i1, w = self.blend_frames(t)
+        w = np.asarray(w)
         return self.root[i0] + w[..., None] * (self.root[i1] - self.root[i0])
 
     def sample(self, t: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
@@ -103,6 +111,7 @@ class Clip:
             positions ``(..., 24, 3)`` in segment mode) and pelvis positions ``(..., 3)``.
         """
         i0, i1, w = self.blend_frames(t)
+        w = np.asarray(w)
         root = self.root[i0] + w[..., None] * (self.root[i1] - self.root[i0])
         if self.local is not None:
             return rot.slerp(self.local[i0], self.local[i1], w[..., None]), root

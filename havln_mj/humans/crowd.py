@@ -146,12 +146,13 @@ class Crowd:
         q0, q1, w, root = [], [], [], []
         for k in ks:
             clip = self.people[k].clip
-            i0, i1, wk = clip.blend_frames(t + self._start[k])
+            i0, i1, wk = clip.blend_frames(float(t + self._start[k]))
             q0.append(clip.local[i0])
             q1.append(clip.local[i1])
             w.append(wk)
             root.append(clip.root[i0] + wk * (clip.root[i1] - clip.root[i0]))
-        local = rot.slerp(np.array(q0), np.array(q1), np.array(w)[:, None])
+        # Neighbouring frames are close: nlerp is slerp to within 0.1° here, and much cheaper.
+        local = rot.nlerp(np.array(q0), np.array(q1), np.array(w)[:, None])
         # Place the pelvis in the world, then the rest follows through the kinematic tree.
         local[:, 0] = rot.mul(self._yaw[ks], local[:, 0])
         root_w = self._anchor[ks] + np.einsum("kij,kj->ki", self._yaw_m[ks], np.array(root))

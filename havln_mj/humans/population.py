@@ -10,21 +10,32 @@ activity whose needs are not met is swapped for another of the region.
 For the real Matterport scans HA3D's own placement file (scan → viewpoint → ["region:
 activity", model id, heading°]) can be used instead; its activities are mapped onto our
 catalog by region.
+
+User-supplied data (:class:`Sources`) changes how people look and move: with a HAPS folder,
+HA3D placements play their own HAPS motion and standing activities in procedural houses play a
+HAPS motion of their region; with an SMPL model file, people are skinned SMPL meshes of random
+shape instead of the built-in bodies.
 """
 
 from __future__ import annotations
 
 import json
 import math
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from havln_mj.errors import MalformedDataError, MissingDataError
 from havln_mj.frames import heading_to
-from havln_mj.humans.body import random_body
-from havln_mj.humans.catalog import Catalog, load_catalog, make_clip
+from havln_mj.humans.body import BodyShape, random_body
+from havln_mj.humans.catalog import HA3D_REGIONS, Activity, Catalog, load_catalog, make_clip
+from havln_mj.humans.clip import Clip
 from havln_mj.humans.crowd import Crowd, Person
+from havln_mj.humans.loaders import LoadedMotion, haps_dir_name
+from havln_mj.humans.skeleton import MAX_HEIGHT, MIN_HEIGHT
+from havln_mj.humans.skinned import Skin
+from havln_mj.humans.smpl_model import SmplModel
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.regions import Regions, SceneObject
 from havln_mj.scene.scan import Scan
@@ -34,6 +45,39 @@ MIN_SEPARATION = 3.0  # metres between people (HA3D)
 SEAT_REACH = 3.0  # metres: a seat this close to the viewpoint may be used
 SEAT_DEPTH_IN = 0.25  # metres from a seat's front edge to where the pelvis sits
 SEAT_CATEGORIES = ("sofa", "chair", "bed", "seating", "toilet")
+
+
+@dataclass(frozen=True)
+class Sources:
+    """Motion and body data the user supplies.
+
+    Attributes:
+        haps: HAPS motions by prompt folder name (``loaders.load_haps_folder``), or None.
+        smpl: An SMPL model to skin people with, or None.
+    """
+
+    haps: dict[str, list[LoadedMotion]] | None = None
+    smpl: SmplModel | None = None
+
+    def haps_for_region(self, code: str) -> list[LoadedMotion]:
+        """The HAPS motions whose prompt's region is ``code``."""
+        out = []
+        for name, motions in (self.haps or {}).items():
+            if _HAPS_REGION.get(_letters(name.split(":", 1)[0])) == code:
+                out += motions
+        return out
+
+    def skin(self, rng: np.random.Generator) -> Skin | None:
+        """A skin of random shape (betas ~ N(0, 1)), or None without a model."""
+        return None if self.smpl is None else Skin(self.smpl, rng.normal(0.0, 1.0, 10))
+
+
+def _letters(text: str) -> str:
+    return "".join(c for c in text.lower() if c.isalpha())
+
+
+# HAPS folder names replace ' ' and '/' by '_': match their regions on letters only.
+_HAPS_REGION = {_letters(name): code for name, code in HA3D_REGIONS.items()}
 
 
 def people_count(regions: Regions) -> int:
@@ -73,8 +117,69 @@ def _spread(graph: NavGraph, candidates: list[str], n: int, rng: np.random.Gener
     return chosen
 
 
+def _walk_targets(graph: NavGraph, vp: str) -> list[str]:
+    """Neighbours a person at ``vp`` can pace to: same floor, 1–6 m away."""
+    pos, floor = graph.position(vp), graph.floor_z(vp)
+    return [
+        n
+        for n in graph.neighbors(vp)
+        if abs(graph.floor_z(n) - floor) < 0.3
+        and 1.0 <= np.linalg.norm(graph.position(n)[:2] - pos[:2]) <= 6.0
+    ]
+
+
+class _Builder:
+    """Makes people: a body (or skin), a clip for an activity, a start offset."""
+
+    def __init__(self, rng: np.random.Generator, sources: Sources | None) -> None:
+        self.rng = rng
+        self.sources = sources or Sources()
+
+    def body(self) -> tuple[BodyShape, Skin | None]:
+        shape = random_body(self.rng)
+        skin = self.sources.skin(self.rng)
+        if skin is not None:
+            # Motions are made for the skin's own height, so its feet meet the floor.
+            rest = skin.model.shaped(skin.betas)
+            height = float(np.clip(np.ptp(rest[:, 1]), MIN_HEIGHT, MAX_HEIGHT))  # SMPL: y up
+            shape = replace(shape, height=height)
+        return shape, skin
+
+    def person(
+        self,
+        body: tuple[BodyShape, Skin | None],
+        clip: Clip,
+        anchor: np.ndarray,
+        heading: float,
+        activity: Activity,
+        viewpoint: str,
+        text: str = "",
+    ) -> Person:
+        shape, skin = body
+        offsets = getattr(clip, "offsets", None)  # loaded motions bring their own skeleton
+        if skin is not None and offsets is not None:
+            skin = None  # a loaded motion keeps its source's proportions: built-in body
+        return Person(
+            shape,
+            clip,
+            anchor,
+            heading,
+            activity.id,
+            text or activity.text,
+            activity.region,
+            viewpoint,
+            float(self.rng.uniform(0.0, max(clip.duration, 1e-9))),
+            offsets,
+            skin,
+        )
+
+
 def populate(
-    scan: Scan, rng: np.random.Generator, catalog: Catalog | None = None, count: int | None = None
+    scan: Scan,
+    rng: np.random.Generator,
+    catalog: Catalog | None = None,
+    count: int | None = None,
+    sources: Sources | None = None,
 ) -> Crowd:
     """People placed in ``scan`` by HA3D's rule.
 
@@ -83,21 +188,22 @@ def populate(
         rng: The only source of randomness.
         catalog: Activities by region (default: the built-in catalog).
         count: Head count (default: ``people_count``).
+        sources: User-supplied motions and SMPL model.
     """
     catalog = catalog or load_catalog()
+    build = _Builder(rng, sources)
     graph, regions = scan.graph, scan.regions
     known = set(catalog.regions())
-    candidates = []
-    for vp in graph.nodes:
-        region = regions.region_of(vp)
-        if region is not None and region.label in known:
-            candidates.append(vp)
+    candidates = [
+        vp
+        for vp in graph.nodes
+        if (region := regions.region_of(vp)) is not None and region.label in known
+    ]
     chosen = _spread(graph, candidates, count or people_count(regions), rng)
     used_seats: set[int] = set()
     people = []
     for vp in chosen:
         region = regions.region_of(vp)
-        assert region is not None
         pos, floor = graph.position(vp), graph.floor_z(vp)
         seats = [
             o
@@ -108,56 +214,37 @@ def populate(
             and o.index not in used_seats
             and np.linalg.norm((o.bbox[:2] + o.bbox[3:5]) / 2 - pos[:2]) <= SEAT_REACH
         ]
-        walk_to = [
-            n
-            for n in graph.neighbors(vp)
-            if abs(graph.floor_z(n) - floor) < 0.3
-            and 1.0 <= np.linalg.norm(graph.position(n)[:2] - pos[:2]) <= 6.0
-        ]
-        shape = random_body(rng)
-        for activity in (
-            catalog.activities(region.label)[int(k)]
-            for k in rng.permutation(len(catalog.activities(region.label)))
-        ):
-            if activity.needs_seat and not seats:
-                continue
-            if activity.needs_path and not walk_to:
-                continue
-            break
+        walk_to = _walk_targets(graph, vp)
+        body = build.body()
+        options = catalog.activities(region.label)
+        for k in rng.permutation(len(options)):
+            activity = options[int(k)]
+            if not ((activity.needs_seat and not seats) or (activity.needs_path and not walk_to)):
+                break
         else:
             continue  # nothing this region offers fits here
+        anchor, text = np.array([pos[0], pos[1], floor]), ""
         if activity.needs_seat:
             seat = min(seats, key=lambda o: np.linalg.norm(o.bbox[:2] - pos[:2]))
             used_seats.add(seat.index)
             anchor, heading = _seat_pose(seat)
-            clip = make_clip(activity, shape.height, rng, seat_height=seat.seat_height)
+            clip = make_clip(activity, body[0].height, rng, seat_height=seat.seat_height)
         elif activity.needs_path:
             target = walk_to[int(rng.integers(len(walk_to)))]
-            anchor, heading = np.array([pos[0], pos[1], floor]), 0.0
+            heading = 0.0
             path = np.array([[0.0, 0.0], graph.position(target)[:2] - pos[:2]])
-            clip = make_clip(activity, shape.height, rng, path=path)
+            clip = make_clip(activity, body[0].height, rng, path=path)
         else:
-            anchor = np.array([pos[0], pos[1], floor])
             centre = region.polygon.mean(axis=0)
-            heading = (
-                heading_to(pos, centre)
-                if np.linalg.norm(centre - pos[:2]) > 0.3
-                else float(rng.uniform(0, 2 * math.pi))
-            )
-            clip = make_clip(activity, shape.height, rng)
-        people.append(
-            Person(
-                shape,
-                clip,
-                anchor,
-                heading,
-                activity.id,
-                activity.text,
-                region.label,
-                vp,
-                float(rng.uniform(0.0, max(clip.duration, 1e-9))),
-            )
-        )
+            far = np.linalg.norm(centre - pos[:2]) > 0.3
+            heading = heading_to(pos, centre) if far else float(rng.uniform(0, 2 * math.pi))
+            haps = build.sources.haps_for_region(region.label)
+            if haps:  # the user's HAPS motion of this region replaces ours
+                clip = haps[int(rng.integers(len(haps)))]
+                text = clip.name.split(":", 1)[-1]
+            else:
+                clip = make_clip(activity, body[0].height, rng)
+        people.append(build.person(body, clip, anchor, heading, activity, vp, text))
     return Crowd(people)
 
 
@@ -198,55 +285,46 @@ def populate_ha3d(
     entries: dict[str, tuple[str, int, float]],
     rng: np.random.Generator,
     catalog: Catalog | None = None,
+    sources: Sources | None = None,
 ) -> Crowd:
-    """People at HA3D's placements for one scan, doing our nearest activity of their region.
+    """People at HA3D's placements for one scan.
 
-    Sitting activities are swapped for standing ones (the placement gives no seat); walking
-    ones pace toward a neighbouring viewpoint when there is one on the same floor.
+    With a HAPS folder each plays its own HAPS motion (prompt and model id). Otherwise it
+    does our nearest activity of its region: sitting is swapped for a standing activity (the
+    placement gives no seat), and walking paces toward a neighbouring viewpoint on the same
+    floor when there is one.
     """
     catalog = catalog or load_catalog()
+    build = _Builder(rng, sources)
     people = []
-    for vp, (text, _model, degrees) in sorted(entries.items()):
+    for vp, (text, model_id, degrees) in sorted(entries.items()):
         if vp not in graph:
             raise MalformedDataError(
                 f"HA3D placement viewpoint {vp!r} is not an included viewpoint of {graph.name}"
             )
         activity = catalog.map_ha3d(text, rng)
         pos, floor = graph.position(vp), graph.floor_z(vp)
-        walk_to = [
-            n
-            for n in graph.neighbors(vp)
-            if abs(graph.floor_z(n) - floor) < 0.3
-            and 1.0 <= np.linalg.norm(graph.position(n)[:2] - pos[:2]) <= 6.0
-        ]
-        if activity.needs_seat or (activity.needs_path and not walk_to):
-            standing = [
-                a
-                for a in catalog.activities(activity.region)
-                if not a.needs_seat and not a.needs_path
-            ]
-            activity = standing[int(rng.integers(len(standing)))]
-        shape = random_body(rng)
-        anchor = np.array([pos[0], pos[1], floor])
-        heading = ha3d_heading(degrees)
-        if activity.needs_path:
-            target = walk_to[int(rng.integers(len(walk_to)))]
-            path = np.array([[0.0, 0.0], graph.position(target)[:2] - pos[:2]])
-            clip = make_clip(activity, shape.height, rng, path=path)
-            heading = 0.0
+        anchor, heading = np.array([pos[0], pos[1], floor]), ha3d_heading(degrees)
+        body = build.body()
+        haps = (build.sources.haps or {}).get(haps_dir_name(text))
+        walk_to = _walk_targets(graph, vp)
+        if haps:
+            clip = haps[model_id % len(haps)]
         else:
-            clip = make_clip(activity, shape.height, rng)
+            if activity.needs_seat or (activity.needs_path and not walk_to):
+                standing = [
+                    a for a in catalog.activities(activity.region) if not a.needs_seat
+                    and not a.needs_path
+                ]  # fmt: skip
+                activity = standing[int(rng.integers(len(standing)))]
+            if activity.needs_path:
+                target = walk_to[int(rng.integers(len(walk_to)))]
+                path = np.array([[0.0, 0.0], graph.position(target)[:2] - pos[:2]])
+                clip = make_clip(activity, body[0].height, rng, path=path)
+                heading = 0.0
+            else:
+                clip = make_clip(activity, body[0].height, rng)
         people.append(
-            Person(
-                shape,
-                clip,
-                anchor,
-                heading,
-                activity.id,
-                activity.text,
-                activity.region,
-                vp,
-                float(rng.uniform(0.0, max(clip.duration, 1e-9))),
-            )
+            build.person(body, clip, anchor, heading, activity, vp, text.split(":", 1)[-1])
         )
     return Crowd(people)

@@ -217,6 +217,19 @@ def slerp(q0: np.ndarray, q1: np.ndarray, t: np.ndarray | float) -> np.ndarray:
     return normalize(w0 * q0 + w1 * q1)
 
 
+def nlerp(q0: np.ndarray, q1: np.ndarray, t: np.ndarray | float) -> np.ndarray:
+    """Normalised linear interpolation from ``q0`` to ``q1``, the short way round.
+
+    Slerp's path at a fraction of the cost: within 0.1° of it for rotations less than 20°
+    apart, as neighbouring frames of a clip are.
+    """
+    q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
+    t = np.asarray(t, float)[..., None]
+    q1 = np.where(np.sum(q0 * q1, axis=-1, keepdims=True) < 0, -q1, q1)
+    q = q0 + t * (q1 - q0)
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+
+
 def yaw(angle: np.ndarray | float) -> np.ndarray:
     """Quaternions of rotations by ``angle`` about +z (counter-clockwise seen from above)."""
     return from_axis((0.0, 0.0, 1.0), angle)

@@ -117,12 +117,13 @@ def offsets_from_positions(positions: np.ndarray) -> np.ndarray:
     return off
 
 
-def _depth_levels() -> list[np.ndarray]:
-    """Joints grouped by depth in the tree (pelvis excluded): parents come a level earlier."""
+def _depth_levels() -> list[tuple[np.ndarray, np.ndarray]]:
+    """``(joints, their parents)`` by depth in the tree (pelvis excluded), shallowest first."""
     depth = np.zeros(NUM_JOINTS, dtype=int)
     for j in range(1, NUM_JOINTS):
         depth[j] = depth[PARENTS[j]] + 1
-    return [np.flatnonzero(depth == d) for d in range(1, depth.max() + 1)]
+    levels = [np.flatnonzero(depth == d) for d in range(1, depth.max() + 1)]
+    return [(level, PARENTS[level]) for level in levels]
 
 
 _LEVELS = _depth_levels()
@@ -134,7 +135,7 @@ def forward_kinematics(
     """World joint positions and orientations from local rotations.
 
     Joints of one tree depth are computed together (8 levels for 23 joints), vectorised over
-    the leading dimensions; positions go through rotation matrices (one matmul per level).
+    the leading dimensions.
 
     Args:
         offsets: Rest offsets ``(24, 3)`` (or ``(..., 24, 3)`` per person); row 0 is ignored.
@@ -145,19 +146,18 @@ def forward_kinematics(
         ``(positions (..., 24, 3), orientations (..., 24, 4))`` in the world frame.
     """
     local = np.asarray(local, float)
-    offsets = np.broadcast_to(np.asarray(offsets, float), (*local.shape[:-1], 3))
-    pos = np.empty((*local.shape[:-1], 3))
+    # Homogeneous transforms: one matmul per level gives each joint's rotation and position.
+    tf = np.zeros((*local.shape[:-1], 4, 4))
+    tf[..., :3, :3] = rot.to_matrix(local)
+    tf[..., :3, 3] = offsets
+    tf[..., 3, 3] = 1.0
+    tf[..., 0, :3, 3] = root
     quat = np.empty_like(local)
-    mats = rot.to_matrix(local)
-    pos[..., 0, :] = root
     quat[..., 0, :] = local[..., 0, :]
-    for level in _LEVELS:
-        parent = PARENTS[level]
-        mp = mats[..., parent, :, :]
-        pos[..., level, :] = pos[..., parent, :] + (mp @ offsets[..., level, :, None])[..., 0]
-        mats[..., level, :, :] = mp @ mats[..., level, :, :]
+    for level, parent in _LEVELS:
+        tf[..., level, :, :] = tf[..., parent, :, :] @ tf[..., level, :, :]
         quat[..., level, :] = rot.mul(quat[..., parent, :], local[..., level, :])
-    return pos, quat
+    return tf[..., :3, 3], quat
 
 
 def smpl_to_body_rotations(local_smpl: np.ndarray) -> np.ndarray:

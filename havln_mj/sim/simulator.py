@@ -169,6 +169,8 @@ class Simulator:
         *,
         humans: bool | CrowdFactory = False,
         human_placements: Path | str | None = None,
+        human_motions: Path | str | None = None,
+        smpl_model: Path | str | None = None,
         speed: float = DEFAULT_SPEED,
         turn_rate: float = DEFAULT_TURN_RATE,
         collision_distance: float = COLLISION_DISTANCE,
@@ -179,7 +181,9 @@ class Simulator:
             humans: Whether scans have people (HA3D's placement rule), or a function making
                 a scan's crowd from ``(scan id, graph, generator)``.
             human_placements: HA3D placement file for the real scans (default
-                ``$HAVLN_HA3D_PLACEMENTS``); used when ``humans`` is True.
+                ``$HAVLN_HA3D_PLACEMENTS``); used when ``humans`` is True, as are:
+            human_motions: HAPS motion folder (default ``$HAVLN_HAPS_DIR``).
+            smpl_model: SMPL model file for skinned people (default ``$HAVLN_SMPL_MODEL``).
             speed: Agent speed for the clock (m/s).
             turn_rate: Agent turning rate for the clock (rad/s).
             collision_distance: HA-VLN's collision threshold (metres, horizontal).
@@ -194,7 +198,7 @@ class Simulator:
         if not (isinstance(humans, bool) or callable(humans)):
             raise InvalidArgumentError(f"humans must be a bool or a crowd factory, got {humans!r}")
         self._humans = humans
-        self._human_placements = human_placements
+        self._human_files = (human_placements, human_motions, smpl_model)
         self._crowds: CrowdFactory | None = None
         self._speed = float(speed)
         self._turn_rate = float(turn_rate)
@@ -331,7 +335,7 @@ class Simulator:
         if self._humans is True:
             from havln_mj.sim.people import HumanCrowds  # the humans package, only when used
 
-            self._crowds = HumanCrowds(self._library.scan, self._human_placements)
+            self._crowds = HumanCrowds(self._library.scan, *self._human_files)
         else:
             self._crowds = self._humans or None
         self._initialized = True

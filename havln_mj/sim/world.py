@@ -180,6 +180,10 @@ def world_spec(scan: Scan, options: WorldOptions | None = None) -> tuple[mujoco.
     spec.visual.headlight.diffuse = (0.3, 0.3, 0.3)
     spec.visual.headlight.specular = (0.0, 0.0, 0.0)
     spec.visual.quality.shadowsize = 0
+    # Capsules and spheres (people) tessellated coarser than MuJoCo's default 28 × 16: on a
+    # CPU renderer this more than doubles the frame rate with people in view.
+    spec.visual.quality.numslices = 12
+    spec.visual.quality.numstacks = 6
     # A key light from above and a weaker fill from below, so floors, walls and ceilings all
     # read clearly without shadows.
     for name, direction, level in (

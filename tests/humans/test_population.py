@@ -10,8 +10,10 @@ import pytest
 
 from havln_mj.errors import MalformedDataError, MissingDataError
 from havln_mj.humans.catalog import load_catalog
+from havln_mj.humans.loaders import haps_dir_name, load_haps_folder
 from havln_mj.humans.population import (
     MIN_SEPARATION,
+    Sources,
     ha3d_heading,
     people_count,
     populate,
@@ -135,3 +137,51 @@ def test_placement_file_errors(tmp_path):
     bad.write_text(json.dumps({"scan": {"vp": ["kitchen:x"]}}))
     with pytest.raises(MalformedDataError, match=r"bad\.json"):
         read_ha3d_placements(bad)
+
+
+def _write_haps(folder, text: str, frames: int = 30) -> None:
+    """A HAPS motion in its exact file layout: the rest pose drifting 1 cm per frame."""
+    motion = np.zeros((25, 6, frames))
+    motion[:24, 0, :] = 1.0  # rot6d rows of the identity: (1, 0, 0) and (0, 1, 0)
+    motion[:24, 4, :] = 1.0
+    motion[24, 0, :] = 0.01 * np.arange(frames)
+    sub = folder / "human_motion_meshes" / haps_dir_name(text)
+    sub.mkdir(parents=True)
+    data = {"motion": motion, "thetas": motion[:24], "root_translation": motion[24, :3]}
+    np.save(sub / "0_smpl_params.npy", {**data, "text": text, "length": frames})
+
+
+def test_haps_motions_replace_ours(tmp_path, shared_data, placements):
+    scan_id = "17DRP5sb8fy"
+    vp, (text, _, _) = sorted(placements[scan_id].items())[0]
+    _write_haps(tmp_path, text)
+    sources = Sources(haps=load_haps_folder(tmp_path))
+    graph = NavGraph.from_file(shared_data / "mp3d_connectivity" / f"{scan_id}_connectivity.json")
+    crowd = populate_ha3d(
+        graph, {vp: placements[scan_id][vp]}, np.random.default_rng(0), sources=sources
+    )
+    (person,) = crowd.people
+    assert person.clip.fps == 20 and person.text == text.split(":", 1)[1]
+    np.testing.assert_allclose(person.rest_offsets, person.clip.offsets)
+    # In procedural houses, standing people of the motion's region play it too.
+    region = load_catalog().region_code(text.split(":")[0])
+    scan = next(
+        s
+        for s in (load_scan(f"proc-{k}") for k in range(8))
+        if any(r.label == region for r in s.regions.regions)
+    )
+    crowds = [populate(scan, np.random.default_rng(k), sources=sources) for k in range(6)]
+    played = [p for c in crowds for p in c.people if p.clip.fps == 20]
+    assert played and all(p.region == region and p.text == text.split(":", 1)[1] for p in played)
+
+
+def test_smpl_model_skins_everyone(blob_smpl):
+    crowd = populate(load_scan("proc-0"), np.random.default_rng(0), sources=Sources(smpl=blob_smpl))
+    assert crowd.people and all(s is not None for s in crowd.skins)
+    betas = [p.skin.betas for p in crowd.people]
+    assert not np.allclose(betas[0], betas[-1])
+    verts = crowd.skin_vertices(1.0)
+    assert set(verts) == set(range(len(crowd)))
+    for k, person in enumerate(crowd.people):
+        # The mesh stands on the person's floor: the lowest joint blob reaches it.
+        assert verts[k][:, 2].min() == pytest.approx(person.anchor[2], abs=0.12)

@@ -15,35 +15,9 @@ from havln_mj.humans.body import BodyShape
 from havln_mj.humans.clip import Clip
 from havln_mj.humans.crowd import Crowd, Person
 from havln_mj.humans.mujoco_people import PeopleWriter, add_people
-from havln_mj.humans.skeleton import JOINT, NUM_JOINTS, SMPL_TO_BODY, rest_positions
+from havln_mj.humans.skeleton import JOINT, NUM_JOINTS, rest_positions
 from havln_mj.humans.skinned import Skin, SkinWriter, vertex_normals
-from havln_mj.humans.smpl_model import SmplModel
 from havln_mj.render.camera import Camera
-
-
-def _blob_model() -> SmplModel:
-    """A small sphere rigidly bound to each joint, in SMPL's frame and array layout."""
-    ball = trimesh.creation.icosphere(subdivisions=1, radius=0.06)
-    joints = rest_positions(1.7) @ SMPL_TO_BODY  # body → SMPL frame (the matrix is orthogonal)
-    verts, faces, weights = [], [], []
-    for j, centre in enumerate(joints):
-        faces.append(ball.faces + len(verts) * len(ball.vertices))
-        verts.append(ball.vertices + centre)
-        w = np.zeros((len(ball.vertices), NUM_JOINTS))
-        w[:, j] = 1.0
-        weights.append(w)
-    verts = np.vstack(verts)
-    regressor = np.zeros((NUM_JOINTS, len(verts)))
-    n = len(ball.vertices)
-    for j in range(NUM_JOINTS):
-        regressor[j, j * n : (j + 1) * n] = 1.0 / n
-    return SmplModel(
-        v_template=verts,
-        shapedirs=np.zeros((len(verts), 3, 10)),
-        j_regressor=regressor,
-        weights=np.vstack(weights),
-        faces=np.vstack(faces),
-    )
 
 
 def _scene(crowd: Crowd) -> tuple[mujoco.MjModel, mujoco.MjData]:
@@ -56,17 +30,17 @@ def _scene(crowd: Crowd) -> tuple[mujoco.MjModel, mujoco.MjData]:
     return spec.compile(), None
 
 
-def _crowd(x: float, wave: float) -> Crowd:
+def _crowd(x: float, wave: float, model) -> Crowd:
     local = rot.identity((2, NUM_JOINTS))
     local[:, JOINT["right_shoulder"]] = rot.from_axis((0, 1, 0), [0.0, wave])
     root = np.tile(rest_positions(1.7)[0], (2, 1))
     clip = Clip(root, 1.0, local=local)
-    skin = Skin(_blob_model())
+    skin = Skin(model)
     return Crowd([Person(BodyShape(1.7), clip, np.array([x, 0.0, 0.0]), 0.0, "wave", skin=skin)])
 
 
-def test_skinned_person_replaces_the_capsules_and_follows_the_pose():
-    crowd = _crowd(0.0, -1.2)  # about +y (forward), negative lifts the right arm (+x) up
+def test_skinned_person_replaces_the_capsules_and_follows_the_pose(blob_smpl):
+    crowd = _crowd(0.0, -1.2, blob_smpl)  # about +y (forward): negative lifts the right arm
     model, _ = _scene(crowd)
     human = np.flatnonzero(model.geom_group == groups.HUMANS)
     assert len(human) == 1 and model.geom_type[human[0]] == mujoco.mjtGeom.mjGEOM_MESH
@@ -98,8 +72,8 @@ def test_vertex_normals_point_out_of_a_sphere():
     np.testing.assert_allclose(np.sum(n * ball.vertices, axis=1), 1.0, atol=0.02)
 
 
-def test_a_skin_needs_rotations():
+def test_a_skin_needs_rotations(blob_smpl):
     joints = np.tile(rest_positions(1.7), (2, 1, 1))
     clip = Clip(joints[:, 0], 10.0, positions=joints)
     with pytest.raises(ValueError, match="rotations"):
-        Person(BodyShape(1.7), clip, np.zeros(3), 0.0, "mdm", skin=Skin(_blob_model()))
+        Person(BodyShape(1.7), clip, np.zeros(3), 0.0, "mdm", skin=Skin(blob_smpl))

@@ -9,7 +9,7 @@ from scipy.ndimage import label
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.proxy.build import ProxyParams, build_proxy, edge_walkability
-from havln_mj.scene.proxy.raster import merge_cells
+from havln_mj.scene.proxy.raster import cover_cells
 
 # Small and large, single- and multi-storey, and scans whose graphs have several components.
 SAMPLE = ["17DRP5sb8fy", "gZ6f7yhEvPG", "pLe4wQe7qrG", "2azQ1b91cZZ", "JF19kD82Mey", "PuKPg4mmafe"]
@@ -77,15 +77,19 @@ def test_proxy_params_are_checked():
         ProxyParams(cell=2)
 
 
-def test_merge_cells_covers_each_cell_once_with_its_key():
+def test_cover_cells_covers_each_cell_with_its_key_and_only_spare_cells_besides():
     rng = np.random.default_rng(3)
-    mask = rng.random((40, 30)) < 0.6
-    key = rng.integers(0, 3, (40, 30))
+    key = np.where(rng.random((40, 30)) < 0.6, rng.integers(0, 3, (40, 30)), -1)
     key[:10] = 1  # a block that should merge into few rectangles
-    mask[:10] = True
-    cover = np.zeros(mask.shape, int)
-    for r0, r1, c0, c1, k in merge_cells(mask, key):
-        assert np.all(key[r0:r1, c0:c1] == k)
-        cover[r0:r1, c0:c1] += 1
-    np.testing.assert_array_equal(cover, mask.astype(int))
-    assert len(merge_cells(np.ones((10, 10), bool), np.zeros((10, 10), int))) == 1
+    spare = (key < 0) & (rng.random(key.shape) < 0.5)
+    cover = np.zeros(key.shape, int)
+    for r0, r1, c0, c1, k in cover_cells(key, spare):
+        block = key[r0:r1, c0:c1]
+        assert np.all((block == k) | spare[r0:r1, c0:c1])
+        cover[r0:r1, c0:c1] += block == k
+    assert np.all(cover[key >= 0] >= 1)
+    assert len(cover_cells(np.zeros((10, 10), int), np.zeros((10, 10), bool))) == 1
+    # A disc on spare ground takes one box instead of one per row.
+    yy, xx = np.mgrid[:20, :20]
+    disc = np.where(np.hypot(yy - 9.5, xx - 9.5) < 9, 0, -1)
+    assert len(cover_cells(disc, disc < 0)) == 1

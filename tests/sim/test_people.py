@@ -122,3 +122,13 @@ def test_people_appear_in_rgb_depth_and_mask(graph):
     assert (depth[mask] < empty.depth[..., 0][mask] - 0.05).mean() > 0.9
     assert (np.abs(with_person.rgb.astype(int) - empty.rgb).sum(-1)[mask] > 0).mean() > 0.9
     assert with_person.isCrushed == 0
+
+
+def test_real_scans_get_ha3d_people(shared_data):
+    placements = shared_data / "ha3d" / "human_placements.json"
+    sim = MatterSim.Simulator(humans=True, human_placements=placements)
+    sim.setNavGraphPath(str(shared_data / "mp3d_connectivity"))
+    sim.setRenderingEnabled(False)
+    sim.newRandomEpisode(["17DRP5sb8fy"])
+    people = sim.getHumanState()[0]
+    assert sorted(p.region for p in people) == ["f", "v"]  # family room and tv room, as HA3D
