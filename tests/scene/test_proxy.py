@@ -38,7 +38,7 @@ def test_edges_are_walkable(proxies, scan):
 def test_few_edges_fail_over_the_sample(proxies):
     bad = sum(len(proxy.unwalkable) for _, proxy in proxies.values())
     edges = sum(graph.num_edges for graph, _ in proxies.values())
-    assert bad <= 0.03 * edges, (bad, edges)
+    assert bad <= 0.01 * edges, (bad, edges)
 
 
 @pytest.mark.parametrize("scan", SAMPLE)

@@ -19,13 +19,14 @@ from scipy.ndimage import binary_dilation
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.scene.boxes import BoxSet
 from havln_mj.scene.navgraph import NavGraph
-from havln_mj.scene.proxy.raster import Grid, corridor, disc, merge_cells
+from havln_mj.scene.proxy.raster import Grid, corridor, cover_cells, disc
 
 _FLOOR_RGBA = (0.62, 0.55, 0.45, 1.0)
 _STAIR_RGBA = (0.50, 0.42, 0.34, 1.0)
 _WALL_RGBA = (0.86, 0.85, 0.80, 1.0)
 _EIGHT = np.ones((3, 3), dtype=bool)
 _EPS_D = 0.05  # metres: keeps element weights finite at their centre
+_NEAR = 4  # cells: within this of another layer's floor, boxes keep to their own cells
 
 
 @dataclass(frozen=True)
@@ -215,16 +216,19 @@ def _neighbour_extremes(height: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _cell_boxes(
-    grid: Grid, mask: np.ndarray, z0: np.ndarray, z1: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+    grid: Grid, mask: np.ndarray, z0: np.ndarray, z1: np.ndarray, spare: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Boxes covering the cells of ``mask``, cell (r, c) spanning ``z0[r, c]..z1[r, c]``.
 
-    Neighbouring cells with equal spans merge into one box.
+    Cells with equal spans share boxes, which may also stand on ``spare`` cells.
+
+    Returns:
+        lo, hi and the (row0, row1, col0, col1) cell rectangle of each box.
     """
     spans, inverse = np.unique(np.stack([z0[mask], z1[mask]], axis=1), axis=0, return_inverse=True)
-    key = np.zeros(mask.shape, dtype=np.int64)
+    key = np.full(mask.shape, -1, dtype=np.int64)
     key[mask] = inverse.ravel()
-    rects = np.array(merge_cells(mask, key), dtype=float).reshape(-1, 5)
+    rects = np.array(cover_cells(key, spare), dtype=float).reshape(-1, 5)
     s = grid.cell
     lo = np.column_stack(
         [grid.x0 + rects[:, 2] * s, grid.y0 + rects[:, 0] * s, spans[rects[:, 4].astype(int), 0]]
@@ -232,30 +236,54 @@ def _cell_boxes(
     hi = np.column_stack(
         [grid.x0 + rects[:, 3] * s, grid.y0 + rects[:, 1] * s, spans[rects[:, 4].astype(int), 1]]
     )
-    return lo, hi
+    return lo, hi, rects[:, :4].astype(int)
+
+
+def _rect_sums(mask: np.ndarray, rects: np.ndarray) -> np.ndarray:
+    """Number of ``mask`` cells in each (row0, row1, col0, col1) rectangle."""
+    c = np.pad(np.cumsum(np.cumsum(mask, axis=0), axis=1), ((1, 0), (1, 0)))
+    r0, r1, c0, c1 = rects.T
+    return c[r1, c1] - c[r0, c1] - c[r1, c0] + c[r0, c0]
 
 
 def _layer_boxes(layers: list[_Layer], grid: Grid, p: ProxyParams) -> BoxSet:
-    """Floor, stair and wall boxes of the layers."""
+    """Floor, stair and wall boxes of the layers.
+
+    Boxes may reach over a layer's walls and past them where no other layer walks near:
+    nothing stands there, and boxes that run on there instead of tracing the ragged outlines
+    of discs and corridors are fewer (physics steps cost about linearly in boxes). Floor and
+    stair cells of one height share boxes.
+    """
     parts: list[tuple[np.ndarray, np.ndarray, str, str, tuple]] = []
     q = 0.05  # floor height quantum (a step a legged robot takes in its stride)
-    for layer in layers:
-        free, height = layer.free, layer.height
-        top = np.round(np.nan_to_num(height) / q) * q
-        for stair, mat, colour in ((False, "floor", _FLOOR_RGBA), (True, "stairs", _STAIR_RGBA)):
-            cells = free & (layer.stair == stair)
-            parts.append((*_cell_boxes(grid, cells, top - p.slab, top), "floor", mat, colour))
+    frees = [layer.free for layer in layers]
+    for k, layer in enumerate(layers):
+        free, height = frees[k], layer.height
+        others = np.zeros(free.shape, bool)
+        for j, other in enumerate(frees):
+            if j != k:
+                others |= other
+        near_other = binary_dilation(others, _EIGHT, iterations=_NEAR)
         nmin, nmax = _neighbour_extremes(height)
         wall = binary_dilation(free, _EIGHT) & ~free
         z0 = np.floor((nmin - p.slab) / q) * q
         z1 = np.ceil((nmax + p.wall_height) / 0.5) * 0.5  # wall tops need no precision
-        for other in layers:
-            if other is not layer:
+        for j, other in enumerate(layers):
+            if j != k:
                 # Leave space where another layer walks: its body band must stay clear.
                 with np.errstate(invalid="ignore"):
                     blocks = (z0 < other.height + p.body_z[1]) & (z1 > other.height + p.body_z[0])
-                wall &= ~(other.free & blocks)
-        parts.append((*_cell_boxes(grid, wall, z0, z1), "wall", "wall", _WALL_RGBA))
+                wall &= ~(frees[j] & blocks)
+        # Cells where a box may stand although none is needed: the layer's walls and what
+        # lies beyond them, unless another layer walks near.
+        spare = ~free & ~near_other
+        top = np.round(np.nan_to_num(height) / q) * q
+        # A box is stairs where most of its cells are.
+        lo, hi, rects = _cell_boxes(grid, free, top - p.slab, top, spare)
+        stairs = _rect_sums(free & layer.stair, rects) * 2 > _rect_sums(free, rects)
+        parts.append((lo[~stairs], hi[~stairs], "floor", "floor", _FLOOR_RGBA))
+        parts.append((lo[stairs], hi[stairs], "floor", "stairs", _STAIR_RGBA))
+        parts.append((*_cell_boxes(grid, wall, z0, z1, spare)[:2], "wall", "wall", _WALL_RGBA))
     n = [len(lo) for lo, *_ in parts]
     return BoxSet(
         np.concatenate([lo for lo, *_ in parts]),

@@ -1,4 +1,4 @@
-"""Grid helpers for graph proxies: rasterising discs and corridors, merging cells into boxes."""
+"""Grid helpers for graph proxies: rasterising discs and corridors, covering cells with boxes."""
 
 from __future__ import annotations
 
@@ -54,28 +54,54 @@ def corridor(
     return (rs, cs), d, t
 
 
-def merge_cells(mask: np.ndarray, key: np.ndarray) -> list[tuple[int, int, int, int, int]]:
-    """Greedy rectangle cover of the cells where ``mask``, joining only equal ``key`` values.
+def cover_cells(key: np.ndarray, spare: np.ndarray) -> list[tuple[int, int, int, int, int]]:
+    """Greedy rectangle cover of the cells where ``key >= 0``, each rectangle of one key.
+
+    A rectangle may also take ``spare`` cells (where any box may stand) and cells of its own
+    key that another rectangle already covers, so rectangles overlap and grow past ragged
+    outlines instead of following them.
 
     Returns:
-        (row0, row1, col0, col1, key) rectangles, end-exclusive, covering each cell once.
+        (row0, row1, col0, col1, key) rectangles, end-exclusive.
     """
     rects: list[tuple[int, int, int, int, int]] = []
-    open_runs: dict[tuple[int, int, int], int] = {}  # (c0, c1, key) -> first row
-    for r in range(mask.shape[0]):
-        row_mask, row_key = mask[r], key[r]
-        runs = set()
-        cols = np.flatnonzero(row_mask)
-        if len(cols):
-            # Split the row's cells into runs of consecutive columns with equal key.
-            breaks = np.flatnonzero((np.diff(cols) != 1) | (np.diff(row_key[cols]) != 0)) + 1
-            for seg in np.split(cols, breaks):
-                runs.add((int(seg[0]), int(seg[-1]) + 1, int(row_key[seg[0]])))
-        for run in list(open_runs):
-            if run not in runs:
-                rects.append((open_runs.pop(run), r, run[0], run[1], run[2]))
-        for run in runs:
-            open_runs.setdefault(run, r)
-    for run, r0 in open_runs.items():
-        rects.append((r0, mask.shape[0], run[0], run[1], run[2]))
-    return sorted(rects)
+    for k in np.unique(key[key >= 0]).tolist():
+        need = key == k
+        rows, cols = np.nonzero(need)
+        r0, r1, c0, c1 = rows.min(), rows.max() + 1, cols.min(), cols.max() + 1
+        need = need[r0:r1, c0:c1].copy()
+        allow = need | spare[r0:r1, c0:c1]
+        h, w = need.shape
+        for r in range(h):
+            while True:
+                todo = np.flatnonzero(need[r])
+                if not len(todo):
+                    break
+                c = int(todo[0])
+                best = None
+                for across_first in (True, False):
+                    if across_first:
+                        a = c - _run(allow[r, :c][::-1])
+                        e = c + _run(allow[r, c:])
+                        b = r + 1
+                        while b < h and allow[b, a:e].all():
+                            b += 1
+                    else:
+                        a, e, b = c, c + 1, r + _run(allow[r:, c])
+                        while a > 0 and allow[r:b, a - 1].all():
+                            a -= 1
+                        while e < w and allow[r:b, e].all():
+                            e += 1
+                    gain = int(need[r:b, a:e].sum())
+                    if best is None or gain > best[0]:
+                        best = (gain, a, b, e)
+                _, a, b, e = best
+                need[r:b, a:e] = False
+                rects.append((int(r0 + r), int(r0 + b), int(c0 + a), int(c0 + e), int(k)))
+    return rects
+
+
+def _run(line: np.ndarray) -> int:
+    """Length of the leading run of True in ``line``."""
+    stop = np.flatnonzero(~line)
+    return int(stop[0]) if len(stop) else len(line)
