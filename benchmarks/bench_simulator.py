@@ -5,6 +5,8 @@
   navigable index and a random heading change per element (drawn up front, so the timing is
   the simulator's); a new random episode every 30 steps in a random scan. steps/s counts
   batch elements (batch 8 at 1,000 calls/s = 8,000 steps/s), the unit MatterSim quotes.
+* **With people**: the same walk, rendering off, in procedural houses ``proc-0``…``proc-4``
+  with their people (HA3D's placement rule), so every action runs the 16 Hz collision check.
 * **RGB-D**: the same walk in the procedural house ``proc-0`` at 640×480 and 128×128 with
   depth on; fps = rendered frames per second of ``makeAction`` + ``getState``.
 * **Memory**: resident set size after each part (``/proc/self/statm``) and the peak.
@@ -81,6 +83,22 @@ def _rendering_off(conn: Path, seconds: float) -> list[dict]:
     return rows
 
 
+def _with_people(seconds: float) -> dict:
+    scans = [f"proc-{k}" for k in range(5)]
+    sim = MatterSim.Simulator(humans=True)
+    sim.setRenderingEnabled(False)
+    sim.initialize()
+    for scan in scans:  # build the houses and their crowds before timing
+        sim.newRandomEpisode([scan])
+    people = len(sim.getHumanState()[0])
+    row = _walk(sim, scans, 1, seconds, seed=3)
+    row["scenes"] = scans
+    row["people_in_last_scene"] = people
+    row["rss_mb"] = _rss_mb()
+    sim.close()
+    return row
+
+
 def _rendering(seconds: float) -> list[dict]:
     rows = []
     for width, height in ((640, 480), (128, 128)):
@@ -116,6 +134,7 @@ def main() -> int:
         print(f"connectivity graphs not found at {conn} (set --data)", file=sys.stderr)
         return 1
     off = _rendering_off(conn, args.seconds)
+    people = _with_people(args.seconds)
     rgbd = _rendering(args.seconds)
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(
@@ -123,6 +142,7 @@ def main() -> int:
             {
                 "machine": machine(),
                 "rendering_off": off,
+                "rendering_off_with_people": people,
                 "rgbd": rgbd,
                 "peak_rss_mb": round(peak, 1),
             },

@@ -37,7 +37,7 @@ from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.navgrid import NavGrid
 from havln_mj.scene.procedural.recipe import load_recipe
 from havln_mj.scene.scan import known_scene_ids, load_scan
-from havln_mj.sim.crowd import COLLISION_DISTANCE, SAMPLE_HZ, Proximity, proximity
+from havln_mj.sim.crowd import COLLISION_DISTANCE, SAMPLE_HZ, Proximity, track_proximity
 from havln_mj.sim.people import HumanCrowds
 from havln_mj.sim.world import COLLISION_MODES, WorldOptions, build_world
 
@@ -119,7 +119,7 @@ def _collisions(crowd: Crowd, track: np.ndarray) -> Proximity:
     t = track[:, 0]
     dense = np.union1d(t, np.arange(t[0], t[-1], 1.0 / SAMPLE_HZ))
     xyz = np.column_stack([np.interp(dense, t, track[:, i]) for i in (1, 2, 3)])
-    return proximity(crowd, dense, xyz)
+    return track_proximity(crowd, dense, xyz)
 
 
 def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
@@ -264,7 +264,7 @@ def run(args: argparse.Namespace) -> dict:
                 if len(crowd) and ep_frames % max(1, round(args.fps / 3)) == 0:
                     ids = cam.render_geom_ids(data)
                     seen = float((human_geom[np.maximum(ids, 0)] & (ids >= 0)).mean())
-                    score += seen if seen < 0.2 else 0.0  # whole people, not one up close
+                    score += seen if seen < 0.1 else 0.0  # whole people, not one up close
                 if score > best_detail:
                     best_detail, best_frame = score, rgb
 

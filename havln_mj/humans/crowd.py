@@ -101,7 +101,21 @@ class Crowd:
         self._yaw_m = rot.to_matrix(self._yaw)
         self._start = np.array([p.start for p in self.people], float)
         self._offsets = np.array([p.rest_offsets for p in self.people], float).reshape(-1, 24, 3)
+        # Every pelvis track in one table, so collision queries sample all people at once.
+        clips = [p.clip for p in self.people]
+        self._roots = np.concatenate([c.root for c in clips]) if clips else np.zeros((0, 3))
+        self._base = np.cumsum([0] + [c.frames for c in clips[:-1]]).astype(int)
+        self._fps = np.array([c.fps for c in clips], float)
+        self._last = np.array([c.frames - 1 for c in clips], float)
+        self._loop = np.array([c.loop_start for c in clips], float)
         self._rotational = [k for k, p in enumerate(self.people) if p.clip.local is not None]
+        # A circle around each person's whole pelvis track, for cheap far-away checks.
+        self._centres = np.zeros((len(clips), 2))
+        self._radii = np.zeros(len(clips))
+        for k, clip in enumerate(clips):
+            xy = (self._anchor[k] + clip.root @ self._yaw_m[k].T)[:, :2]
+            self._centres[k] = (xy.min(axis=0) + xy.max(axis=0)) / 2
+            self._radii[k] = np.linalg.norm(xy - self._centres[k], axis=1).max()
         self._segments = [k for k, p in enumerate(self.people) if p.clip.local is None]
 
     def __len__(self) -> int:
@@ -112,13 +126,38 @@ class Crowd:
         """Each person's body."""
         return [p.shape for p in self.people]
 
-    def positions(self, times: np.ndarray) -> np.ndarray:
-        """Pelvis positions ``(len(times), N, 3)`` at the given simulated seconds."""
+    def positions(self, times: np.ndarray, people: np.ndarray | None = None) -> np.ndarray:
+        """Pelvis positions ``(len(times), P, 3)`` at the given simulated seconds.
+
+        Args:
+            times: Simulated seconds.
+            people: Indices of the people wanted (default: everyone, in order).
+        """
         times = np.atleast_1d(np.asarray(times, float))
-        out = np.empty((len(times), len(self.people), 3))
-        for k, p in enumerate(self.people):
-            out[:, k] = p.clip.root_at(times + self._start[k])
-        return self._anchor + np.einsum("kij,tkj->tki", self._yaw_m, out)
+        k = slice(None) if people is None else np.asarray(people, int)
+        # Clip.frame_time for all people at once: loop from loop_start past the last frame
+        # (simulated time and start offsets are never negative).
+        f = (times[:, None] + self._start[k]) * self._fps[k]
+        last, loop = self._last[k], self._loop[k]
+        period = last - loop
+        wrapped = loop + np.mod(f - loop, np.maximum(period, 1.0))
+        f = np.where(f > last, np.where(period > 0, wrapped, last), f)
+        i0 = f.astype(int)
+        w = (f - i0)[..., None]
+        base = self._base[k]
+        r0 = self._roots[base + i0]
+        root = r0 + w * (self._roots[base + np.minimum(i0 + 1, last.astype(int))] - r0)
+        # Turn by each anchor's heading (about z) and place it.
+        c, s = self._yaw_m[k, 0, 0], self._yaw_m[k, 1, 0]
+        out = np.empty_like(root)
+        out[..., 0] = c * root[..., 0] - s * root[..., 1]
+        out[..., 1] = s * root[..., 0] + c * root[..., 1]
+        out[..., 2] = root[..., 2]
+        return out + self._anchor[k]
+
+    def footprint(self) -> tuple[np.ndarray, np.ndarray]:
+        """Circles ``(centres (N, 2), radii (N,))`` holding each pelvis at all times."""
+        return self._centres, self._radii
 
     def pose(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """World joint positions ``(N, 24, 3)`` and orientations ``(N, 24, 4)`` at time ``t``."""

@@ -8,7 +8,9 @@ people uses :data:`NO_CROWD`.
 Collision (the HA-VLN signal): the agent is within ``distance`` (default 1 m) of a person,
 measured horizontally from the agent's base to the person's pelvis, at any time during an
 action. Actions are sampled at :data:`SAMPLE_HZ` or faster, both ends included, so a person
-passing through the agent's path mid-action is caught.
+passing through the agent's path mid-action is caught. Only people whose whole pelvis track
+(:meth:`Crowd.footprint`) comes within :data:`NEAR_M` of the action's segment are sampled;
+the smallest distance reported is exact below ``NEAR_M`` and ``inf`` above.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import numpy as np
 
 COLLISION_DISTANCE = 1.0  # metres, HA-VLN's threshold
 SAMPLE_HZ = 16.0
+NEAR_M = 3.0  # metres: people farther than this from an action are not sampled
 
 
 class Crowd(Protocol):
@@ -40,8 +43,15 @@ class Crowd(Protocol):
         """Each person's SMPL skin (``havln_mj.humans.skinned.Skin``) or None."""
         ...
 
-    def positions(self, times: np.ndarray) -> np.ndarray:
-        """Pelvis positions ``(len(times), len(self), 3)`` at the given simulated seconds."""
+    def positions(self, times: np.ndarray, people: np.ndarray | None = None) -> np.ndarray:
+        """Pelvis positions ``(len(times), P, 3)`` at the given simulated seconds.
+
+        ``people`` indexes the people wanted (default: everyone, in order).
+        """
+        ...
+
+    def footprint(self) -> tuple[np.ndarray, np.ndarray]:
+        """Circles ``(centres (P, 2), radii (P,))`` holding each pelvis at all times."""
         ...
 
     def skin_vertices(self, t: float) -> dict:
@@ -74,8 +84,11 @@ class _NoCrowd:
     def skin_vertices(self, t: float) -> dict:
         return {}
 
-    def positions(self, times: np.ndarray) -> np.ndarray:
+    def positions(self, times: np.ndarray, people: np.ndarray | None = None) -> np.ndarray:
         return np.zeros((len(np.atleast_1d(times)), 0, 3))
+
+    def footprint(self) -> tuple[np.ndarray, np.ndarray]:
+        return np.zeros((0, 2)), np.zeros(0)
 
     def pose(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros((0, 24, 3)), np.zeros((0, 24, 4))
@@ -94,7 +107,8 @@ class Proximity:
     Attributes:
         crushed: Whether any person came within the collision distance.
         people: Indices of those people.
-        min_distance: Smallest horizontal distance to anyone (``inf`` without people).
+        min_distance: Smallest horizontal distance to anyone, if under :data:`NEAR_M`, else
+            ``inf``.
     """
 
     crushed: bool
@@ -114,20 +128,74 @@ def action_samples(
         ``(times (n,), positions (n, 3))`` at :data:`SAMPLE_HZ` or faster, both ends included.
     """
     n = max(2, math.ceil(total_s * SAMPLE_HZ) + 1)
-    times = np.linspace(0.0, total_s, n)
+    times = np.arange(n) * (total_s / (n - 1))
     frac = np.clip(times / move_s, 0.0, 1.0) if move_s > 0 else np.ones(n)
     positions = start + frac[:, None] * (np.asarray(end) - np.asarray(start))
     return t0 + times, positions
 
 
+def _near(crowd: Crowd, start: np.ndarray, end: np.ndarray, reach: float) -> list[int]:
+    """Indices of people whose pelvis track comes within ``reach`` of the segment."""
+    centres, radii = crowd.footprint()
+    ax, ay, bx, by = float(start[0]), float(start[1]), float(end[0]), float(end[1])
+    dx, dy = bx - ax, by - ay
+    length2 = dx * dx + dy * dy
+    out = []
+    # Plain floats: a handful of people is faster this way than through numpy.
+    for k, ((cx, cy), r) in enumerate(zip(centres.tolist(), radii.tolist(), strict=True)):
+        t = ((cx - ax) * dx + (cy - ay) * dy) / length2 if length2 > 0 else 0.0
+        t = min(max(t, 0.0), 1.0)
+        if math.hypot(cx - ax - t * dx, cy - ay - t * dy) - r <= reach:
+            out.append(k)
+    return out
+
+
 def proximity(
-    crowd: Crowd, times: np.ndarray, positions: np.ndarray, distance: float = COLLISION_DISTANCE
+    crowd: Crowd,
+    start: np.ndarray,
+    end: np.ndarray,
+    t0: float,
+    move_s: float,
+    total_s: float,
+    distance: float = COLLISION_DISTANCE,
 ) -> Proximity:
-    """The collision signal for an agent at ``positions`` at ``times``."""
+    """The collision signal of an action, people far from it left out.
+
+    The action moves from ``start`` to ``end`` in ``move_s`` seconds, then turns in place until
+    ``total_s``; it starts at simulated time ``t0``.
+    """
     if len(crowd) == 0:
         return NO_PROXIMITY
-    people = crowd.positions(times)  # (n, P, 3)
-    d = np.hypot(people[..., 0] - positions[:, None, 0], people[..., 1] - positions[:, None, 1])
+    near = _near(crowd, start, end, max(NEAR_M, distance))
+    if not near:
+        return NO_PROXIMITY
+    start, end = np.asarray(start, float), np.asarray(end, float)
+    times, positions = action_samples(start, end, t0, move_s, total_s)
+    return track_proximity(crowd, times, positions, distance, near)
+
+
+def track_proximity(
+    crowd: Crowd,
+    times: np.ndarray,
+    positions: np.ndarray,
+    distance: float = COLLISION_DISTANCE,
+    people: np.ndarray | list[int] | None = None,
+) -> Proximity:
+    """The collision signal for an agent at ``positions (n, 3)`` at ``times (n,)``.
+
+    Args:
+        crowd: The people.
+        times: Sample times, dense enough to catch a crossing (≥ :data:`SAMPLE_HZ`).
+        positions: The agent's positions at those times.
+        distance: Collision threshold (metres, horizontal).
+        people: Indices of the people to check (default: everyone).
+    """
+    if len(crowd) == 0 or (people is not None and len(people) == 0):
+        return NO_PROXIMITY
+    index = np.arange(len(crowd)) if people is None else np.asarray(people, int)
+    track = crowd.positions(times, index)  # (n, P, 3)
+    d = np.hypot(track[..., 0] - positions[:, None, 0], track[..., 1] - positions[:, None, 1])
     closest = d.min(axis=0)
-    hit = tuple(int(k) for k in np.flatnonzero(closest <= distance))
-    return Proximity(bool(hit), hit, float(closest.min()))
+    hit = tuple(int(index[k]) for k in np.flatnonzero(closest <= distance))
+    smallest = float(closest.min())
+    return Proximity(bool(hit), hit, smallest if smallest < NEAR_M else math.inf)

@@ -55,7 +55,6 @@ from havln_mj.sim.crowd import (
     NO_PROXIMITY,
     Crowd,
     Proximity,
-    action_samples,
     proximity,
 )
 from havln_mj.sim.egocentric import DEFAULT_TURN, EgoAction, ego_to_mattersim, parse_ego_action
@@ -550,10 +549,10 @@ class Simulator:
                 duration = WAIT_S
             contact = NO_PROXIMITY
             if len(a.crowd):
-                start = np.array([here.x, here.y, here.z])
-                end = np.array([target.x, target.y, target.z])
-                times, positions = action_samples(start, end, a.time, move_s, duration)
-                contact = proximity(a.crowd, times, positions, self._collision_distance)
+                start, end = (here.x, here.y, here.z), (target.x, target.y, target.z)
+                contact = proximity(
+                    a.crowd, start, end, a.time, move_s, duration, self._collision_distance
+                )
             a.time += duration
             a.step += 1
             a.heading, a.elevation, a.view_index = heading, elevation, view

@@ -177,8 +177,12 @@ class _Standing:
     def skins(self):
         return []
 
-    def positions(self, times):
-        return np.broadcast_to(self.points, (len(times), *self.points.shape)).copy()
+    def positions(self, times, people=None):
+        points = self.points if people is None else self.points[people]
+        return np.broadcast_to(points, (len(times), *points.shape)).copy()
+
+    def footprint(self):
+        return self.points[:, :2], np.zeros(len(self.points))
 
     def states(self, t):
         return [tuple(p) for p in self.points]
