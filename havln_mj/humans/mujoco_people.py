@@ -3,9 +3,9 @@
 Each person ``k`` adds 24 mocap bodies ``human<k>/<joint>`` (direct children of the world,
 as MuJoCo requires of mocap bodies) carrying the body's geoms (``human<k>/<joint>/<i>``).
 The geoms make no contacts (``contype = conaffinity = 0``; the HA-VLN collision signal is a
-distance, computed analytically) and sit in their own geom group, ``groups.HUMANS``, so
-cameras see them and collision queries can leave them out. Until posed, people are parked
-far below the building.
+distance, computed analytically) unless asked to be solid, and sit in their own geom group,
+``groups.HUMANS``, so cameras see them and collision queries can leave them out. Until
+posed, people are parked far below the building.
 """
 
 from __future__ import annotations
@@ -34,12 +34,17 @@ def body_name(person: int, joint: int) -> str:
 
 
 def add_people(
-    spec: mujoco.MjSpec, shapes: list[BodyShape], skins: Sequence[Skin | None] = ()
+    spec: mujoco.MjSpec,
+    shapes: list[BodyShape],
+    skins: Sequence[Skin | None] = (),
+    solid: bool = False,
 ) -> None:
     """Adds the mocap bodies and geoms of ``shapes`` (person k = ``shapes[k]``) to ``spec``.
 
     A person with a skin (``skins[k]``) is drawn as that mesh (in their top's colour) and
-    their joint bodies carry no geoms.
+    their joint bodies carry no geoms. ``solid`` makes the built-in bodies' geoms collide
+    (``contype = conaffinity = 1``), so they push a simulated robot; it must be chosen before
+    compiling, since MuJoCo aggregates contact bits per body then.
     """
     skins = list(skins) + [None] * (len(shapes) - len(skins))
     for k, (shape, skin) in enumerate(zip(shapes, skins, strict=True)):
@@ -52,8 +57,8 @@ def add_people(
                 geom = body.add_geom(
                     name=f"{body_name(k, j)}/{i}",
                     type=_GEOM[piece.kind],
-                    contype=0,
-                    conaffinity=0,
+                    contype=int(solid),
+                    conaffinity=int(solid),
                     group=groups.HUMANS,
                     rgba=(*shape.colour(piece.part), 1.0),
                     mass=0.0,

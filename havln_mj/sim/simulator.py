@@ -15,6 +15,11 @@ navigable-location rules, discretised views and exception types (see
   the heading and elevation change); an action that neither moves nor turns is a wait of
   :data:`WAIT_S`. People are a function of that time.
 * **Egocentric actions** (HA-VLN): ``makeEgoAction`` (see :mod:`havln_mj.sim.egocentric`).
+* **A legged robot**: ``Simulator(body="go1")`` executes every action with a physically
+  simulated Unitree GO1 (see :mod:`havln_mj.sim.legged`): graph actions become turn-then-walk
+  primitives, ``makeRobotAction`` takes the real robot's continuous actions (forward 0.5 m,
+  turn ±45°, stop), states report the snapped viewpoint with the true pose in ``state.pose``,
+  the clock advances by physics time, and a fall ends the episode (``state.fell``).
 * **Images**: BGR ``uint8`` and ``uint16`` depth in 0.25 mm units, as MatterSim; RGB and
   ``float32`` metres on request (``set_color_order``, ``set_depth_units``).
 
@@ -58,6 +63,7 @@ from havln_mj.sim.crowd import (
     proximity,
 )
 from havln_mj.sim.egocentric import DEFAULT_TURN, EgoAction, ego_to_mattersim, parse_ego_action
+from havln_mj.sim.legged import LeggedAgent, LeggedOptions, LeggedView, LeggedWorld, Outcome
 from havln_mj.sim.navigation import NavTable
 from havln_mj.sim.rendering import ViewSettings, depth_to_mattersim
 from havln_mj.sim.scenes import SceneLibrary
@@ -75,6 +81,8 @@ from havln_mj.sim.world import WorldOptions
 
 WAIT_S = 1.0  # seconds a "stay" action without rotation lasts
 COLOR_ORDERS = ("BGR", "RGB")
+BODIES = ("point", "go1")
+ROBOT_ACTIONS = ("stop", "forward", "turn_left", "turn_right")
 DEPTH_UNITS = ("mattersim", "metres")
 
 CrowdFactory = Callable[[str, NavGraph, np.random.Generator], Crowd]
@@ -108,9 +116,11 @@ class _Agent:
     """One batch element's mutable episode state."""
 
     __slots__ = (
+        "contacts",
         "crowd",
         "elevation",
         "heading",
+        "legged",
         "navigable",
         "state",
         "step",
@@ -129,6 +139,8 @@ class _Agent:
         self.time = 0.0
         self.navigable: list[ViewPoint] = []
         self.state: SimState | None = None
+        self.legged: LeggedAgent | None = None
+        self.contacts = 0
 
 
 def _check_bool(name: str, value: object) -> bool:
@@ -173,6 +185,8 @@ class Simulator:
         speed: float = DEFAULT_SPEED,
         turn_rate: float = DEFAULT_TURN_RATE,
         collision_distance: float = COLLISION_DISTANCE,
+        body: str = "point",
+        legged: LeggedOptions | None = None,
     ) -> None:
         """Creates an uninitialised simulator with MatterSim's default settings.
 
@@ -186,6 +200,8 @@ class Simulator:
             speed: Agent speed for the clock (m/s).
             turn_rate: Agent turning rate for the clock (rad/s).
             collision_distance: HA-VLN's collision threshold (metres, horizontal).
+            body: ``"point"`` (kinematic camera rig) or ``"go1"`` (the simulated quadruped).
+            legged: How the GO1 is set up and driven (default :class:`LeggedOptions`).
         """
         for name, value in (
             ("speed", speed),
@@ -196,7 +212,12 @@ class Simulator:
                 raise InvalidArgumentError(f"{name} must be a positive number, got {value!r}")
         if not (isinstance(humans, bool) or callable(humans)):
             raise InvalidArgumentError(f"humans must be a bool or a crowd factory, got {humans!r}")
+        if body not in BODIES:
+            raise InvalidArgumentError(f"body {body!r} unknown; valid: {', '.join(BODIES)}")
         self._humans = humans
+        self._body = body
+        self._legged_options = legged or LeggedOptions()
+        self._legged_worlds: dict[str, tuple[LeggedWorld, LeggedView]] = {}
         self._human_files = (human_placements, human_motions, smpl_model)
         self._crowds: CrowdFactory | None = None
         self._speed = float(speed)
@@ -349,6 +370,9 @@ class Simulator:
         """Releases renderers; the simulator can be initialised again."""
         if self._library is not None:
             self._library.close()
+        for _, view in self._legged_worlds.values():
+            view.close()
+        self._legged_worlds = {}
         self._library = None
         self._agents = []
         self._initialized = False
@@ -442,10 +466,24 @@ class Simulator:
         for table, vp, h, e in starts:
             a = _Agent(table, self._crowd(table))
             a.heading, a.elevation, a.view_index = self._view(h, e)
+            if self._body == "go1":
+                a.legged = LeggedAgent(self._legged_world(table.scan_id, a.crowd)[0])
+                a.legged.place(table.graph.position(vp), table.graph.floor_z(vp), a.heading, 0.0)
+                a.heading, a.elevation, a.view_index = self._view(a.legged.heading(), e)
             a.navigable = table.candidates(vp, a.heading, a.elevation, self._cos_half_hfov())
             agents.append(a)
         self._agents = agents
         self._publish(range(len(agents)), [NO_PROXIMITY] * len(agents))
+
+    def _legged_world(self, scan_id: str, crowd: Crowd) -> tuple[LeggedWorld, LeggedView]:
+        """The GO1 world of a scan (built once per scan)."""
+        entry = self._legged_worlds.get(scan_id)
+        if entry is None:
+            world = LeggedWorld(
+                self._library.scan(scan_id), self._cfg.world_options, crowd, self._legged_options
+            )
+            entry = self._legged_worlds[scan_id] = (world, LeggedView(world))
+        return entry
 
     def _view(self, heading: float, elevation: float) -> tuple[float, float, int]:
         if self._cfg.discretized:
@@ -542,17 +580,24 @@ class Simulator:
                 heading, elevation, view = continuous_view(
                     a.heading + dh, a.elevation + de, cfg.elevation_limits
                 )
-            move_s = target.rel_distance / self._speed
-            turn = max(abs(wrap_angle(heading - a.heading)), abs(elevation - a.elevation))
-            duration = move_s + turn / self._turn_rate
-            if duration == 0.0:
-                duration = WAIT_S
-            contact = NO_PROXIMITY
-            if len(a.crowd):
-                start, end = (here.x, here.y, here.z), (target.x, target.y, target.z)
-                contact = proximity(
-                    a.crowd, start, end, a.time, move_s, duration, self._collision_distance
-                )
+            if a.legged is not None:
+                outcome = self._legged_move(a, k, target, heading)
+                heading, elevation, view = self._view(a.legged.heading(), elevation)
+                duration = outcome.duration
+                contact = outcome.contact or NO_PROXIMITY
+                a.contacts = outcome.human_contacts
+            else:
+                move_s = target.rel_distance / self._speed
+                turn = max(abs(wrap_angle(heading - a.heading)), abs(elevation - a.elevation))
+                duration = move_s + turn / self._turn_rate
+                if duration == 0.0:
+                    duration = WAIT_S
+                contact = NO_PROXIMITY
+                if len(a.crowd):
+                    start, end = (here.x, here.y, here.z), (target.x, target.y, target.z)
+                    contact = proximity(
+                        a.crowd, start, end, a.time, move_s, duration, self._collision_distance
+                    )
             a.time += duration
             a.step += 1
             a.heading, a.elevation, a.view_index = heading, elevation, view
@@ -560,6 +605,75 @@ class Simulator:
             changed.append(i)
             near.append(contact)
         self._publish(changed, near)
+
+    def _legged_move(self, a: _Agent, k: int, target: ViewPoint, heading: float) -> Outcome:
+        """A graph action with the GO1: walk to the target viewpoint, then face ``heading``."""
+        legged = a.legged
+        if k == 0:
+            turn = wrap_angle(heading - legged.heading())
+            if abs(turn) < 1e-9:
+                return legged.run([("stand", WAIT_S)], a.time)
+            return legged.run([("turn", turn)], a.time)
+        floor = a.table.graph.floor_z(target.viewpointId)
+        return legged.go_to(np.array([target.x, target.y, floor]), heading, a.time)
+
+    def makeRobotAction(self, action: Sequence[str]) -> None:  # noqa: N802
+        """The real robot's continuous actions, one per element (``body="go1"`` only).
+
+        ``"forward"`` walks :attr:`LeggedOptions.forward_m`, ``"turn_left"``/``"turn_right"``
+        turn by :attr:`LeggedOptions.turn_rad`, ``"stop"`` leaves the element alone. The
+        state's location becomes the included viewpoint nearest the robot on its floor.
+
+        Raises:
+            InvalidActionError: An unknown action, or the simulator is not driving a GO1.
+        """
+        t0 = time.perf_counter()
+        agents = self._running()
+        if self._body != "go1":
+            raise InvalidActionError(
+                f'makeRobotAction needs Simulator(body="go1"); this one drives a {self._body} body'
+            )
+        opts = self._legged_options
+        plans = {
+            "forward": [("forward", opts.forward_m)],
+            "turn_left": [("turn", -opts.turn_rad)],
+            "turn_right": [("turn", opts.turn_rad)],
+        }
+        acts = self._batch("action", action)
+        for act in acts:
+            if act not in ROBOT_ACTIONS:
+                raise InvalidActionError(
+                    f"robot action {act!r} unknown; valid: {', '.join(ROBOT_ACTIONS)}"
+                )
+        changed, near = [], []
+        cos_half = self._cos_half_hfov()
+        for i, (a, act) in enumerate(zip(agents, acts, strict=True)):
+            if act == "stop":
+                continue
+            outcome = a.legged.run(plans[act], a.time)
+            a.time += outcome.duration
+            a.step += 1
+            a.contacts = outcome.human_contacts
+            a.heading, a.elevation, a.view_index = self._view(a.legged.heading(), a.elevation)
+            vp = self._nearest_viewpoint(a)
+            a.navigable = a.table.candidates(vp, a.heading, a.elevation, cos_half)
+            changed.append(i)
+            near.append(outcome.contact or NO_PROXIMITY)
+        self._publish(changed, near)
+        self._timers["process"] += time.perf_counter() - t0
+
+    @staticmethod
+    def _nearest_viewpoint(a: _Agent) -> str:
+        """The included viewpoint nearest the robot, preferring ones on its floor."""
+        graph = a.table.graph
+        pos = a.legged.position()
+        floor = pos[2] - a.legged.body.gains.foot_depth
+
+        def cost(vp: str) -> float:
+            p = graph.position(vp)
+            return float(np.hypot(*(p[:2] - pos[:2]))) + 10.0 * abs(graph.floor_z(vp) - floor)
+
+        return min(graph.nodes, key=cost)
 
     # ------------------------------------------------------------------ state
 
@@ -583,9 +697,13 @@ class Simulator:
         if not cfg.rendering:
             return (*self._blank_images(), None)
         t0 = time.perf_counter()
-        view = self._library.view(a.table.scan_id, self._view_settings(), a.crowd)
-        here = a.navigable[0]
-        frame = view.render(np.array([here.x, here.y, here.z]), a.heading, a.elevation, a.time)
+        if a.legged is not None:
+            view = self._legged_worlds[a.table.scan_id][1]
+            frame = view.render(a.legged, self._view_settings(), a.elevation, a.time)
+        else:
+            view = self._library.view(a.table.scan_id, self._view_settings(), a.crowd)
+            here = a.navigable[0]
+            frame = view.render(np.array([here.x, here.y, here.z]), a.heading, a.elevation, a.time)
         rgb = frame.rgb if cfg.color_order == "RGB" else np.ascontiguousarray(frame.rgb[..., ::-1])
         if frame.depth is None:
             depth = self._blank_images()[1]
@@ -616,6 +734,9 @@ class Simulator:
                 contact.people,
                 contact.min_distance,
                 mask,
+                None if a.legged is None else np.append(a.legged.position(), a.heading),
+                a.legged is not None and a.legged.fell,
+                a.contacts,
             )
 
     def getState(self) -> list[SimState]:  # noqa: N802
@@ -660,5 +781,6 @@ class Simulator:
     new_random_episode = newRandomEpisode
     make_action = makeAction
     make_ego_action = makeEgoAction
+    make_robot_action = makeRobotAction
     get_state = getState
     get_human_state = getHumanState

@@ -84,18 +84,25 @@ class SimState:
             (metres; ``inf`` in a scene without people).
         humanMask: H×W ``bool``, True where a person is seen; None unless the human mask is
             enabled (and rendering is on).
+        pose: With the GO1: its true trunk pose ``(x, y, z, heading)``; None for the point body.
+        fell: With the GO1: the robot has fallen (the episode is over).
+        humanContacts: With the GO1 and solid people: most robot–person contacts at once
+            during the last action.
     """
 
     __slots__ = (
         "crushedBy",
         "depth",
         "elevation",
+        "fell",
         "heading",
+        "humanContacts",
         "humanMask",
         "isCrushed",
         "location",
         "minHumanDistance",
         "navigableLocations",
+        "pose",
         "rgb",
         "scanId",
         "step",
@@ -119,6 +126,9 @@ class SimState:
         crushedBy: tuple[int, ...] = (),  # noqa: N803
         minHumanDistance: float = float("inf"),  # noqa: N803
         humanMask: np.ndarray | None = None,  # noqa: N803
+        pose: np.ndarray | None = None,
+        fell: bool = False,
+        humanContacts: int = 0,  # noqa: N803
     ) -> None:
         self.scanId = scanId
         self.step = step
@@ -134,6 +144,9 @@ class SimState:
         self.crushedBy = crushedBy
         self.minHumanDistance = minHumanDistance
         self.humanMask = humanMask
+        self.pose = pose
+        self.fell = fell
+        self.humanContacts = humanContacts
 
     def __repr__(self) -> str:
         return (

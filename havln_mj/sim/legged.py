@@ -1,0 +1,281 @@
+"""The GO1 in the loop: graph and continuous actions executed by a physically simulated robot.
+
+A scan's :class:`LeggedWorld` is its building with collision geometry, its people and one
+GO1, compiled once; each batch element is a :class:`LeggedAgent` with its own ``MjData``.
+
+* **Graph actions** (``makeAction`` to a navigable viewpoint) become turn-then-walk primitive
+  sequences closed on the robot's state estimate: face the target, walk the distance, and
+  correct once more when the robot ends more than :attr:`LeggedOptions.retry_m` away; then
+  turn to the heading MatterSim would have (the old heading plus the requested change).
+* **Continuous actions** (the real-robot setting): forward ``forward_m``, turn
+  ``±turn_rad``, stop.
+* **Time**: every action advances the element's clock by the physics time it took.
+* **People**: poses follow the element's clock. Their geoms make no contact unless
+  ``physical_humans`` makes them solid; then the robot's contacts with them are counted. The
+  HA-VLN collision signal (1 m, horizontal, trunk to pelvis) is sampled along the whole action
+  at every controller tick (≥ 16 Hz).
+* **Falls** end the episode: a fallen element ignores further actions and reports ``fell``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from havln_mj import groups
+from havln_mj.frames import heading_to, wrap_angle
+from havln_mj.humans.mujoco_people import PeopleWriter, add_people
+from havln_mj.render.camera import Camera
+from havln_mj.robot.go1.model import add_go1
+from havln_mj.robot.go1.primitives import Go1Body, PrimitiveResult
+from havln_mj.scene.scan import Scan
+from havln_mj.sim.crowd import NO_CROWD, Crowd, Proximity, track_proximity
+from havln_mj.sim.rendering import View, ViewSettings
+from havln_mj.sim.world import WorldOptions, world_spec
+
+PREFIX = "go1/"
+
+
+@dataclass(frozen=True)
+class LeggedOptions:
+    """How the GO1 is set up and driven.
+
+    Attributes:
+        estimate: ``"truth"`` (primitives closed on the simulator's pose) or ``"odometry"``
+            (IMU and leg kinematics, which drift as on the real robot).
+        camera_height: None for the GO1's head camera; a height (m) raises it on a mast.
+        physical_humans: Whether people's bodies push the robot (contacts are reported).
+        forward_m: Size of the continuous FORWARD action.
+        turn_rad: Size of the continuous TURN actions.
+        retry_m: A graph move ending farther than this from its viewpoint walks again.
+        menagerie_xml: A user's Menagerie ``go1.xml`` to use instead of the built-in model.
+    """
+
+    estimate: str = "truth"
+    camera_height: float | None = None
+    physical_humans: bool = False
+    forward_m: float = 0.5
+    turn_rad: float = math.pi / 4
+    retry_m: float = 0.15
+    menagerie_xml: str | None = None
+
+
+@dataclass
+class Outcome:
+    """What one action did to a legged agent."""
+
+    duration: float = 0.0
+    fell: bool = False
+    contact: Proximity | None = None
+    human_contacts: int = 0
+    primitives: list[PrimitiveResult] | None = None
+
+
+class LeggedWorld:
+    """A scan's building, people and one GO1, compiled for physics."""
+
+    def __init__(
+        self, scan: Scan, world_options: WorldOptions, crowd: Crowd, options: LeggedOptions
+    ) -> None:
+        self.scan, self.crowd, self.options = scan, crowd, options
+        collision = world_options.collision
+        if collision == "none":
+            collision = "auto"  # a legged robot needs floors to stand on
+        spec, self.collision, _ = world_spec(scan, _with_collision(world_options, collision))
+        add_people(spec, crowd.shapes, crowd.skins, solid=options.physical_humans)
+        start = scan.graph.nodes[0]
+        x, y, _ = scan.graph.position(start)
+        self.handles = add_go1(
+            spec,
+            (x, y, scan.graph.floor_z(start)),
+            prefix=PREFIX,
+            camera_height=options.camera_height,
+            menagerie_xml=options.menagerie_xml,
+        )
+        self.model = spec.compile()
+        self.human_geoms = np.flatnonzero(self.model.geom_group == groups.HUMANS)
+        robot_bodies = [
+            b for b in range(self.model.nbody) if self.model.body(b).name.startswith(PREFIX)
+        ]
+        self.robot_geoms = np.flatnonzero(np.isin(self.model.geom_bodyid, robot_bodies))
+        self.camera = self.handles.camera
+
+
+def _with_collision(options: WorldOptions, collision: str) -> WorldOptions:
+    return WorldOptions(
+        collision=collision,
+        coacd=options.coacd,
+        collision_band=options.collision_band,
+        collision_chunk=options.collision_chunk,
+        offscreen=options.offscreen,
+        vfov_deg=options.vfov_deg,
+    )
+
+
+class LeggedAgent:
+    """One batch element's GO1: its own physics state in a :class:`LeggedWorld`."""
+
+    def __init__(self, world: LeggedWorld) -> None:
+        self.world = world
+        self.data = mujoco.MjData(world.model)
+        self.body = Go1Body(world.model, self.data, PREFIX, world.options.estimate)
+        self.people = PeopleWriter(world.model, len(world.crowd.shapes))
+        self.fell = False
+
+    # --------------------------------------------------------------------- state
+
+    def position(self) -> np.ndarray:
+        """True trunk position ``(x, y, z)``."""
+        p = self.body.true_pose()
+        return np.array([p.x, p.y, p.z])
+
+    def heading(self) -> float:
+        """True heading (radians, from +y turning right)."""
+        return self.body.true_pose().heading
+
+    def place(self, position: np.ndarray, floor_z: float, heading: float, t: float) -> None:
+        """Stands the robot at a viewpoint's floor point, facing ``heading``, at time ``t``."""
+        self.pose_people(t)
+        self.body.reset(float(position[0]), float(position[1]), float(floor_z), heading)
+        self.fell = self.body.fallen
+
+    def pose_people(self, t: float) -> None:
+        """Writes the people's poses at simulated time ``t`` into this agent's data."""
+        if self.people.n_people:
+            self.people.write(self.data, *self.world.crowd.pose(t))
+
+    # ------------------------------------------------------------------- actions
+
+    def run(self, plan: list[tuple[str, float]], t0: float) -> Outcome:
+        """Runs primitives ``("forward", m)``, ``("turn", rad)``, ``("stand", s)`` from ``t0``."""
+        return self._execute(lambda do: [do(kind, amount) for kind, amount in plan], t0)
+
+    def go_to(self, target: np.ndarray, final_heading: float | None, t0: float) -> Outcome:
+        """Walks to a floor point, then turns to ``final_heading``.
+
+        Turn to face the point, walk the distance, and once more if still too far; None as
+        ``final_heading`` keeps the walking direction.
+        """
+        retry = self.world.options.retry_m
+
+        def script(do) -> list[PrimitiveResult]:
+            done = []
+            for _ in range(3):
+                p = self.body.pose()
+                here = np.array([p.x, p.y])
+                gap = float(np.linalg.norm(target[:2] - here))
+                if done and gap <= retry:
+                    break
+                if gap > 0.02:
+                    bearing = heading_to(np.array([p.x, p.y, 0.0]), target)
+                    done.append(do("turn", wrap_angle(bearing - p.heading)))
+                    done.append(do("forward", gap))
+                if self.body.fallen:
+                    return done
+            if final_heading is not None:
+                turn = wrap_angle(final_heading - self.body.pose().heading)
+                if abs(turn) > math.radians(1.0):
+                    done.append(do("turn", turn))
+            return done
+
+        return self._execute(script, t0)
+
+    def _execute(self, script, t0: float) -> Outcome:
+        if self.fell:
+            return Outcome(fell=True, contact=None)
+        d = self.data
+        start_time = d.time
+        times, points, touches = [t0], [self.position()], [0]
+        crowd = self.world.crowd
+        physical = self.world.options.physical_humans
+
+        def tick(physics_time: float) -> None:
+            t = t0 + physics_time - start_time
+            if physical:
+                self.pose_people(t)  # solid people must move with the physics
+            times.append(t)
+            points.append(self.position())
+            if physical:
+                touches.append(self._human_contacts())
+
+        def do(kind: str, amount: float) -> PrimitiveResult:
+            if self.body.fallen:
+                return None
+            if kind == "forward":
+                return self.body.forward(amount, on_tick=tick)
+            if kind == "stand":
+                return self.body.stand(amount, on_tick=tick)
+            return self.body.turn(amount, on_tick=tick)
+
+        results = [r for r in script(do) if r is not None]
+        duration = d.time - start_time
+        tick(d.time)
+        self.fell = self.body.fallen
+        contact = None
+        if len(crowd) and crowd is not NO_CROWD:
+            contact = track_proximity(crowd, np.array(times), np.array(points))
+        return Outcome(duration, self.fell, contact, int(max(touches)), results)
+
+    def _human_contacts(self) -> int:
+        """Robot–person contacts in the current physics state."""
+        d = self.data
+        if not d.ncon:
+            return 0
+        g1, g2 = d.contact.geom1[: d.ncon], d.contact.geom2[: d.ncon]
+        human, robot = self.world.human_geoms, self.world.robot_geoms
+        return int(
+            np.sum(
+                (np.isin(g1, human) & np.isin(g2, robot))
+                | (np.isin(g2, human) & np.isin(g1, robot))
+            )
+        )
+
+
+class LeggedView:
+    """Renders an agent's view from the robot's camera, in the agent's own physics state."""
+
+    def __init__(self, world: LeggedWorld) -> None:
+        self.world = world
+        self._camera: Camera | None = None
+        self._settings: ViewSettings | None = None
+        cam = world.model.camera(world.camera)
+        self._cam_id, self._base_quat = cam.id, world.model.cam_quat[cam.id].copy()
+        self._human_geoms = world.model.geom_group == groups.HUMANS
+
+    def render(
+        self, agent: LeggedAgent, settings: ViewSettings, elevation: float, t: float
+    ) -> View:
+        """The view at simulated time ``t``, the camera pitched by ``elevation`` (radians)."""
+        model = self.world.model
+        if self._camera is None or settings != self._settings:
+            if self._camera is not None:
+                self._camera.close()
+            self._camera = Camera(
+                model, self.world.camera, settings.width, settings.height,
+                math.degrees(settings.vfov),
+            )  # fmt: skip
+            self._settings = settings
+        agent.pose_people(t)
+        # The camera looks along its −z with +y up: pitching up turns it about its +x.
+        pitch = np.array([math.cos(elevation / 2), math.sin(elevation / 2), 0.0, 0.0])
+        quat = np.empty(4)
+        mujoco.mju_mulQuat(quat, self._base_quat, pitch)
+        model.cam_quat[self._cam_id] = quat
+        mujoco.mj_kinematics(model, agent.data)
+        mujoco.mj_camlight(model, agent.data)
+        frame = self._camera.render(agent.data, rgb=True, depth=settings.depth)
+        model.cam_quat[self._cam_id] = self._base_quat
+        mask = None
+        if settings.human_mask:
+            ids = self._camera.render_geom_ids(agent.data)
+            mask = (ids >= 0) & self._human_geoms[np.maximum(ids, 0)]
+        return View(frame.rgb, frame.depth, mask)
+
+    def close(self) -> None:
+        """Releases the camera."""
+        if self._camera is not None:
+            self._camera.close()
+            self._camera = None

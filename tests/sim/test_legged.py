@@ -1,0 +1,142 @@
+"""The Simulator driving the GO1: graph and continuous actions, people, falls, images."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+import havln_mj as MatterSim  # noqa: N812 - MatterSim code, only the import changed
+from havln_mj.errors import InvalidActionError
+from havln_mj.frames import heading_to, wrap_angle
+from havln_mj.humans.body import BodyShape
+from havln_mj.humans.crowd import Crowd, Person
+from havln_mj.humans.motion import idle
+from havln_mj.scene.scan import load_scan
+from havln_mj.sim.legged import LeggedOptions
+
+SCAN = "proc-0"
+
+
+@pytest.fixture(scope="module")
+def graph():
+    return load_scan(SCAN).graph
+
+
+@pytest.fixture(scope="module")
+def edge(graph):
+    """A flat edge of 2–4 m and the heading along it."""
+    a, b, _ = next(
+        (u, v, d)
+        for u, v, d in graph.edges()
+        if 2.0 < d < 4.0 and abs(graph.floor_z(u) - graph.floor_z(v)) < 0.05
+    )
+    return a, b, heading_to(graph.position(a), graph.position(b))
+
+
+def _sim(**kwargs) -> MatterSim.Simulator:
+    sim = MatterSim.Simulator(body="go1", **kwargs)
+    sim.setRenderingEnabled(False)
+    sim.setCameraResolution(64, 48)
+    return sim
+
+
+def test_graph_action_walks_to_the_viewpoint(graph, edge):
+    a, b, h = edge
+    sim = _sim()
+    sim.newEpisode([SCAN], [a], [h + 0.4], [0.0])
+    start = sim.getState()[0]
+    assert start.pose is not None and not start.fell
+    assert np.hypot(*(start.pose[:2] - graph.position(a)[:2])) < 0.05
+    ids = [v.viewpointId for v in start.navigableLocations]
+    sim.makeAction([ids.index(b)], [0.0], [0.0])
+    state = sim.getState()[0]
+    assert state.location.viewpointId == b  # the snapped viewpoint
+    assert np.hypot(*(state.pose[:2] - graph.position(b)[:2])) < 0.3
+    # MatterSim keeps the heading when moving: the robot turns back to it.
+    assert abs(wrap_angle(state.heading - (h + 0.4))) < math.radians(5)
+    assert state.heading == pytest.approx(state.pose[3])
+    dist = float(np.linalg.norm(graph.position(b)[:2] - graph.position(a)[:2]))
+    assert dist / 0.6 < state.time < dist / 0.2 + 6.0  # physics time, a walking robot's pace
+    assert state.step == 1 and not state.fell
+
+
+def test_continuous_actions(graph, edge):
+    a, _, h = edge
+    sim = _sim(legged=LeggedOptions(forward_m=0.5, turn_rad=math.pi / 4))
+    sim.newEpisode([SCAN], [a], [h], [0.0])
+    p0 = sim.getState()[0].pose
+    sim.makeRobotAction(["forward"])
+    p1 = sim.getState()[0].pose
+    along = (p1[:2] - p0[:2]) @ [math.sin(p0[3]), math.cos(p0[3])]
+    assert along == pytest.approx(0.5, abs=0.05)
+    sim.makeRobotAction(["turn_right"])
+    p2 = sim.getState()[0].pose
+    assert math.degrees(wrap_angle(p2[3] - p1[3])) == pytest.approx(45.0, abs=3.0)
+    before = sim.getState()[0]
+    sim.make_robot_action(["stop"])
+    assert sim.getState()[0] is before
+    near = sim.getState()[0].location.viewpointId
+    assert np.hypot(*(graph.position(near)[:2] - p2[:2])) == pytest.approx(
+        min(np.hypot(*(graph.position(v)[:2] - p2[:2])) for v in graph.nodes), abs=1e-9
+    )
+    with pytest.raises(InvalidActionError, match="jump"):
+        sim.makeRobotAction(["jump"])
+    point = MatterSim.Simulator()
+    point.setRenderingEnabled(False)
+    point.newRandomEpisode([SCAN])
+    with pytest.raises(InvalidActionError, match="go1"):
+        point.makeRobotAction(["forward"])
+
+
+def test_solid_people_touch_the_robot_and_count_as_collisions(graph, edge):
+    a, b, h = edge
+    mid = (graph.position(a) + graph.position(b)) / 2
+    spot = np.array([mid[0], mid[1], graph.floor_z(a)])
+
+    def standing(scan_id, g, rng):
+        return Crowd([Person(BodyShape(1.7), idle(1.7, rng), spot, h + math.pi, "idle")])
+
+    sim = _sim(humans=standing, legged=LeggedOptions(physical_humans=True))
+    sim.newEpisode([SCAN], [a], [h], [0.0])
+    ids = [v.viewpointId for v in sim.getState()[0].navigableLocations]
+    sim.makeAction([ids.index(b)], [0.0], [0.0])
+    state = sim.getState()[0]
+    assert state.isCrushed == 1 and state.crushedBy == (0,)
+    assert state.humanContacts > 0
+
+
+def test_a_fall_ends_the_episode(edge):
+    a, _, h = edge
+    sim = _sim()
+    sim.newEpisode([SCAN], [a], [h], [0.0])
+    legged = sim._agents[0].legged  # tip the robot onto its back
+    qa = legged.body.qadr
+    legged.data.qpos[qa + 2] += 0.2
+    legged.data.qpos[qa + 3 : qa + 7] = (0.0, 1.0, 0.0, 0.0)
+    mujoco.mj_forward(legged.world.model, legged.data)
+    sim.makeRobotAction(["forward"])
+    state = sim.getState()[0]
+    assert state.fell
+    sim.makeRobotAction(["forward"])  # nothing moves once fallen
+    assert sim.getState()[0].fell
+    np.testing.assert_allclose(sim.getState()[0].pose, state.pose)
+
+
+def test_images_come_from_the_robot_camera(edge):
+    a, _, h = edge
+    sim = _sim(legged=LeggedOptions(camera_height=1.5))
+    sim.setRenderingEnabled(True)
+    sim.setDepthEnabled(True)
+    sim.set_depth_units("metres")
+    sim.newEpisode([SCAN], [a], [h], [0.0])
+    level = sim.getState()[0]
+    sim.makeAction([0], [0.0], [0.5])  # look up: the camera pitches, the robot stays
+    up = sim.getState()[0]
+    assert level.rgb.shape == (48, 64, 3) and level.rgb.any()
+    assert (level.depth > 0).mean() > 0.8
+    assert not np.array_equal(level.rgb, up.rgb)
+    np.testing.assert_allclose(up.pose[:2], level.pose[:2], atol=0.05)
+    sim.close()
