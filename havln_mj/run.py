@@ -32,12 +32,14 @@ from havln_mj.humans.skinned import SkinWriter
 from havln_mj.render.camera import Camera
 from havln_mj.render.topdown import draw_topdown
 from havln_mj.robot.point_body import CAMERA, PointBody
+from havln_mj.run_go1 import run_go1
 from havln_mj.scene.ids import parse_scene_id
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.navgrid import NavGrid
 from havln_mj.scene.procedural.recipe import load_recipe
 from havln_mj.scene.scan import known_scene_ids, load_scan
 from havln_mj.sim.crowd import COLLISION_DISTANCE, SAMPLE_HZ, Proximity, track_proximity
+from havln_mj.sim.legged import LeggedOptions
 from havln_mj.sim.people import HumanCrowds
 from havln_mj.sim.world import COLLISION_MODES, WorldOptions, build_world
 
@@ -141,6 +143,24 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--fps", type=float, default=10.0, help="video frames per simulated second")
     p.add_argument("--collision", choices=COLLISION_MODES, default="auto")
     p.add_argument("--no-people", action="store_true", help="leave the scene empty")
+    p.add_argument(
+        "--robot",
+        choices=("point", "go1"),
+        default="point",
+        help="go1: also walk the episodes with the simulated GO1 and compare (go1.mp4)",
+    )
+    p.add_argument(
+        "--go1-estimate",
+        choices=("truth", "odometry"),
+        default="truth",
+        help="what the GO1's primitives are closed on (default: ground truth)",
+    )
+    p.add_argument(
+        "--go1-camera-height",
+        type=float,
+        default=None,
+        help="raise the GO1's camera on a mast to this height (m); default: its head camera",
+    )
     p.add_argument(
         "--human-placements",
         type=Path,
@@ -311,6 +331,21 @@ def run(args: argparse.Namespace) -> dict:
         navgrid=navgrid,
         people=crowd.positions(np.array([0.0]))[0],
     )
+    go1 = None
+    if args.robot == "go1":
+        print("walking the episodes with the GO1 ...", flush=True)
+        go1 = run_go1(
+            scan,
+            crowd,
+            [e.path for e in episodes],
+            out,
+            width=args.width,
+            height=args.height,
+            vfov=args.vfov,
+            fps=args.fps,
+            options=LeggedOptions(estimate=args.go1_estimate, camera_height=args.go1_camera_height),
+            collision="auto" if args.collision == "none" else args.collision,
+        )
     summary = {
         "havln_mj": __version__,
         "scene": scan.scene_id,
@@ -337,6 +372,9 @@ def run(args: argparse.Namespace) -> dict:
         },
         "files": {"video": str(video_path), "frame": str(frame_path), "topdown": str(map_path)},
     }
+    if go1 is not None:
+        summary["go1"] = go1
+        summary["files"]["go1_video"] = go1["video"]
     (out / "summary.json").write_text(json.dumps(summary, indent=1))
     print(
         f"wrote {out} ({frames} frames, {summary['steps']} steps, {summary['timing']['total_s']} s)"

@@ -58,3 +58,21 @@ def test_unknown_scene_fails_at_once_with_the_nearest_match(tmp_path):
     assert proc.returncode == 2
     assert "proc-<seed>" in proc.stderr and "Did you mean 'proc-3'" in proc.stderr
     assert not list(tmp_path.iterdir())  # nothing written
+
+
+def test_people_are_counted_and_the_go1_walks_the_episodes(tmp_path):
+    out = tmp_path / "go1"
+    args = "--scene proc-0 --episodes 1 --seed 0 --width 64 --height 48 --fps 4 --robot go1"
+    assert main([*args.split(), "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["people"] and all(p["activity"] and p["region"] for p in summary["people"])
+    assert summary["human_collisions"] == sum(e["human_collisions"] for e in summary["episodes"])
+    go1 = summary["go1"]
+    (episode,) = go1["episodes"]
+    assert episode["path"] == summary["episodes"][0]["path"]
+    assert episode["reached"] and not episode["fell"] and go1["falls"] == 0
+    assert all(s["end_error_m"] < 0.3 for s in episode["steps"])  # the acceptance bound
+    assert episode["go1_seconds"] > episode["point_body_seconds"] > 0
+    video = cv2.VideoCapture(go1["video"])
+    ok, frame = video.read()
+    assert ok and frame.shape == (48, 128, 3)  # head camera beside the chase view

@@ -30,7 +30,7 @@ from havln_mj.frames import heading_to, wrap_angle
 from havln_mj.humans.mujoco_people import PeopleWriter, add_people
 from havln_mj.render.camera import Camera
 from havln_mj.robot.go1.model import add_go1
-from havln_mj.robot.go1.primitives import Go1Body, PrimitiveResult
+from havln_mj.robot.go1.primitives import Go1Body, OnTick, PrimitiveResult
 from havln_mj.scene.scan import Scan
 from havln_mj.sim.crowd import NO_CROWD, Crowd, Proximity, track_proximity
 from havln_mj.sim.rendering import View, ViewSettings
@@ -65,13 +65,23 @@ class LeggedOptions:
 
 @dataclass
 class Outcome:
-    """What one action did to a legged agent."""
+    """What one action did to a legged agent.
+
+    Attributes:
+        duration: Physics seconds.
+        fell: The robot fell.
+        contact: The HA-VLN collision signal over the action (None without people).
+        human_contacts: Most robot–person contacts at once (solid people only).
+        primitives: The primitives run.
+        track: Trunk positions ``(n, 4)`` of ``(t, x, y, z)`` at every controller tick.
+    """
 
     duration: float = 0.0
     fell: bool = False
     contact: Proximity | None = None
     human_contacts: int = 0
     primitives: list[PrimitiveResult] | None = None
+    track: np.ndarray | None = None
 
 
 class LeggedWorld:
@@ -95,6 +105,7 @@ class LeggedWorld:
             camera_height=options.camera_height,
             menagerie_xml=options.menagerie_xml,
         )
+        _add_chase_camera(spec, self.handles.trunk)
         self.model = spec.compile()
         self.human_geoms = np.flatnonzero(self.model.geom_group == groups.HUMANS)
         robot_bodies = [
@@ -102,6 +113,22 @@ class LeggedWorld:
         ]
         self.robot_geoms = np.flatnonzero(np.isin(self.model.geom_bodyid, robot_bodies))
         self.camera = self.handles.camera
+
+
+CHASE_CAMERA = PREFIX + "chase"
+
+
+def _add_chase_camera(spec: mujoco.MjSpec, trunk: str) -> None:
+    """A camera riding 1.8 m behind and 1.2 m above the trunk, looking ahead and down."""
+    # Camera axes in the trunk frame (x forward, y left, z up): it looks along −z.
+    axes = np.column_stack([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]])
+    tilt = math.radians(25.0)
+    down = np.array(
+        [[1, 0, 0], [0, math.cos(tilt), -math.sin(tilt)], [0, math.sin(tilt), math.cos(tilt)]]
+    )
+    quat = np.empty(4)
+    mujoco.mju_mat2Quat(quat, (axes @ down.T).ravel())
+    spec.body(trunk).add_camera(name=CHASE_CAMERA, pos=(-1.8, 0.0, 1.2), quat=quat, fovy=60.0)
 
 
 def _with_collision(options: WorldOptions, collision: str) -> WorldOptions:
@@ -149,11 +176,22 @@ class LeggedAgent:
 
     # ------------------------------------------------------------------- actions
 
-    def run(self, plan: list[tuple[str, float]], t0: float) -> Outcome:
-        """Runs primitives ``("forward", m)``, ``("turn", rad)``, ``("stand", s)`` from ``t0``."""
-        return self._execute(lambda do: [do(kind, amount) for kind, amount in plan], t0)
+    def run(
+        self, plan: list[tuple[str, float]], t0: float, on_tick: OnTick | None = None
+    ) -> Outcome:
+        """Runs primitives ``("forward", m)``, ``("turn", rad)``, ``("stand", s)`` from ``t0``.
 
-    def go_to(self, target: np.ndarray, final_heading: float | None, t0: float) -> Outcome:
+        ``on_tick(t)`` is called at every controller tick with the simulated time.
+        """
+        return self._execute(lambda do: [do(kind, amount) for kind, amount in plan], t0, on_tick)
+
+    def go_to(
+        self,
+        target: np.ndarray,
+        final_heading: float | None,
+        t0: float,
+        on_tick: OnTick | None = None,
+    ) -> Outcome:
         """Walks to a floor point, then turns to ``final_heading``.
 
         Turn to face the point, walk the distance, and once more if still too far; None as
@@ -181,9 +219,9 @@ class LeggedAgent:
                     done.append(do("turn", turn))
             return done
 
-        return self._execute(script, t0)
+        return self._execute(script, t0, on_tick)
 
-    def _execute(self, script, t0: float) -> Outcome:
+    def _execute(self, script, t0: float, on_tick: OnTick | None = None) -> Outcome:
         if self.fell:
             return Outcome(fell=True, contact=None)
         d = self.data
@@ -200,6 +238,8 @@ class LeggedAgent:
             points.append(self.position())
             if physical:
                 touches.append(self._human_contacts())
+            if on_tick is not None:
+                on_tick(t)
 
         def do(kind: str, amount: float) -> PrimitiveResult:
             if self.body.fallen:
@@ -214,10 +254,12 @@ class LeggedAgent:
         duration = d.time - start_time
         tick(d.time)
         self.fell = self.body.fallen
+        times_a, points_a = np.array(times), np.array(points)
         contact = None
         if len(crowd) and crowd is not NO_CROWD:
-            contact = track_proximity(crowd, np.array(times), np.array(points))
-        return Outcome(duration, self.fell, contact, int(max(touches)), results)
+            contact = track_proximity(crowd, times_a, points_a)
+        track = np.column_stack([times_a, points_a])
+        return Outcome(duration, self.fell, contact, int(max(touches)), results, track)
 
     def _human_contacts(self) -> int:
         """Robot–person contacts in the current physics state."""

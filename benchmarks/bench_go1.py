@@ -1,0 +1,271 @@
+"""GO1 navigation primitives: accuracy, falls, odometry drift and speed.
+
+* **Flat floor, ground truth**: ``--primitives`` primitives (forward 0.5 m or turn ±45°, drawn
+  at random), episodes of 10 from a random start heading (and after any fall), undisturbed
+  and again with 40 N × 0.1 s side pushes (``xfrc_applied`` on the trunk, random side, at a
+  random time in the first 1.2 s of the primitive). Errors: distance and heading error
+  (mean, p95), lateral drift, duration (physics s), falls, time-outs.
+* **Odometry**: the same primitives closed on gyro + leg odometry; reports the true errors and
+  the estimate's drift per primitive and over each 10-primitive episode.
+* **Speed**: controller time per 2 ms physics step (primitive wall time minus bare
+  ``mj_step`` time for the same steps), and the real-time factor of the robot walking in the
+  procedural house ``proc-0`` (collision boxes) with 4 mocap capsule "people" moved every tick.
+
+Prints one JSON object. Run: ``python benchmarks/bench_go1.py [--primitives N]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import time
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import mujoco
+import numpy as np
+from common import machine
+
+from havln_mj.robot.go1 import Go1Body, add_go1, flat_floor_spec
+
+EPISODE = 10
+TURN = math.pi / 4
+PUSH_N, PUSH_S = 40.0, 0.1
+
+
+def _stats(values: list[float], scale: float = 1.0, digits: int = 4) -> dict:
+    if not values:
+        return {"n": 0}
+    a = np.abs(np.asarray(values)) * scale
+    return {
+        "n": len(a),
+        "mean": round(float(a.mean()), digits),
+        "p95": round(float(np.percentile(a, 95)), digits),
+        "max": round(float(a.max()), digits),
+    }
+
+
+def _flat_robot(estimate: str) -> tuple[mujoco.MjModel, mujoco.MjData, Go1Body]:
+    spec = flat_floor_spec()
+    add_go1(spec)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    return model, data, Go1Body(model, data, estimate=estimate)
+
+
+def _run_flat(n: int, estimate: str, push: bool, seed: int) -> dict:
+    model, data, robot = _flat_robot(estimate)
+    rng = np.random.default_rng(seed)
+    fwd: dict[str, list[float]] = {k: [] for k in ("err", "lat", "dh", "dur", "est_err")}
+    trn: dict[str, list[float]] = {k: [] for k in ("err", "drift", "dur", "est_err")}
+    episode_drift: list[float] = []
+    episode_yaw: list[float] = []
+    falls = {"forward": 0, "turn": 0}
+    timeouts = 0
+    steps = 0
+    wall = 0.0
+    pushes = 0
+    for i in range(n):
+        if i % EPISODE == 0 or robot.fallen:
+            if i and not robot.fallen and estimate == "odometry":
+                est, true = robot.pose(), robot.true_pose()
+                episode_drift.append(math.hypot(est.x - true.x, est.y - true.y))
+                episode_yaw.append(
+                    math.degrees(abs(math.remainder(est.yaw - true.yaw, 2 * math.pi)))
+                )
+            robot.reset(0.0, 0.0, 0.0, float(rng.uniform(0, 2 * math.pi)), settle=0.5)
+        kind = "forward" if rng.random() < 0.5 else "turn"
+        theta = TURN if rng.random() < 0.5 else -TURN
+        on_tick = None
+        if push:
+            t_push = data.time + float(rng.uniform(0.05, 1.2))
+            side = 1.0 if rng.random() < 0.5 else -1.0
+            state = {"on": False, "done": False}
+
+            def on_tick(t: float, t_push=t_push, side=side, state=state) -> None:
+                if not state["done"] and not state["on"] and t >= t_push - 1e-9:
+                    yaw = robot.true_pose().yaw
+                    force = PUSH_N * side * np.array([-math.sin(yaw), math.cos(yaw), 0.0])
+                    data.xfrc_applied[robot.trunk_id, :3] = force
+                    state["on"], state["t"] = True, t
+                elif state["on"] and t >= state["t"] + PUSH_S - 1e-9:
+                    data.xfrc_applied[robot.trunk_id, :3] = 0.0
+                    state["on"], state["done"] = False, True
+
+        t = time.perf_counter()
+        res = (
+            robot.forward(0.5, on_tick=on_tick)
+            if kind == "forward"
+            else robot.turn(theta, on_tick=on_tick)
+        )
+        wall += time.perf_counter() - t
+        data.xfrc_applied[:] = 0.0
+        if push and state["done"]:
+            pushes += 1
+        steps += res.steps
+        timeouts += res.timed_out
+        if res.fell:
+            falls[kind] += 1
+            continue
+        if kind == "forward":
+            fwd["err"].append(res.error)
+            fwd["lat"].append(res.lateral)
+            fwd["dh"].append(res.heading_change)
+            fwd["dur"].append(res.duration)
+            fwd["est_err"].append(res.est_distance - res.distance)
+        else:
+            trn["err"].append(res.error)
+            trn["drift"].append(math.hypot(res.distance, res.lateral))
+            trn["dur"].append(res.duration)
+            trn["est_err"].append(res.est_heading_change - res.heading_change)
+    out = {
+        "primitives": n,
+        "forward_0.5m": {
+            "distance_error_m": _stats(fwd["err"]),
+            "signed_mean_error_m": round(float(np.mean(fwd["err"])), 4) if fwd["err"] else None,
+            "lateral_m": _stats(fwd["lat"]),
+            "heading_change_deg": _stats(fwd["dh"], 180 / math.pi, 2),
+            "duration_s": _stats(fwd["dur"], digits=2),
+        },
+        "turn_45deg": {
+            "heading_error_deg": _stats(trn["err"], 180 / math.pi, 2),
+            "signed_mean_error_deg": round(math.degrees(float(np.mean(trn["err"]))), 2)
+            if trn["err"]
+            else None,
+            "drift_m": _stats(trn["drift"]),
+            "duration_s": _stats(trn["dur"], digits=2),
+        },
+        "falls": falls,
+        "fall_rate": round((falls["forward"] + falls["turn"]) / n, 4),
+        "timeouts": timeouts,
+        "physics_steps": steps,
+        "real_time_factor": round(steps * model.opt.timestep / wall, 1),
+    }
+    if push:
+        out["pushes_applied"] = pushes
+    if estimate == "odometry":
+        out["odometry_error_per_primitive"] = {
+            "forward_distance_m": _stats(fwd["est_err"]),
+            "turn_heading_deg": _stats(trn["est_err"], 180 / math.pi, 2),
+        }
+        out["odometry_drift_per_10_primitives"] = {
+            "position_m": _stats(episode_drift),
+            "yaw_deg": _stats(episode_yaw, digits=2),
+        }
+    return out
+
+
+def _controller_time(seed: int) -> dict:
+    """Wall time per physics step of the whole primitive loop vs bare mj_step."""
+    model, data, robot = _flat_robot("truth")
+    rng = np.random.default_rng(seed)
+    robot.reset(0.0, 0.0, 0.0, 0.0, settle=0.2)
+    steps, t = 0, time.perf_counter()
+    for k in range(20):
+        res = robot.forward(0.5) if k % 2 == 0 else robot.turn(float(rng.choice([TURN, -TURN])))
+        steps += res.steps
+    total = (time.perf_counter() - t) / steps
+    robot.reset(0.0, 0.0, 0.0, 0.0, settle=0.2)
+    robot.gait.start()
+    t = time.perf_counter()
+    for _ in range(steps):
+        mujoco.mj_step(model, data)
+    physics = (time.perf_counter() - t) / steps
+    return {
+        "total_us_per_step": round(total * 1e6, 1),
+        "mj_step_us": round(physics * 1e6, 1),
+        "controller_us_per_step": round((total - physics) * 1e6, 1),
+    }
+
+
+def _house(seconds: float, seed: int) -> dict:
+    from havln_mj.scene.scan import load_scan
+    from havln_mj.sim.world import WorldOptions, world_spec
+
+    scan = load_scan("proc-0")
+    g = scan.graph
+    spec, _, n_boxes = world_spec(scan, WorldOptions(collision="boxes"))
+    rng = np.random.default_rng(seed)
+    vps = list(g.nodes)
+    vp = vps[int(rng.integers(len(vps)))]
+    p = g.position(vp)
+    z = g.floor_z(vp)
+    add_go1(spec, (p[0], p[1], z), 0.0)
+    people = []
+    for k in range(4):
+        body = spec.worldbody.add_body(
+            name=f"person{k}", mocap=True, pos=(p[0] + 1 + k, p[1], z + 0.9)
+        )
+        body.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_CAPSULE,
+            size=(0.2, 0.7, 0),
+            contype=0,
+            conaffinity=0,
+            group=2,
+        )
+        people.append(body.name)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    robot = Go1Body(model, data)
+    robot.reset(p[0], p[1], z, float(rng.uniform(0, 2 * math.pi)), settle=0.3)
+    mocap = [model.body(n).mocapid[0] for n in people]
+    centre = np.array([p[0], p[1], z + 0.9])
+
+    def on_tick(t: float) -> None:
+        for k, m in enumerate(mocap):
+            a = 0.5 * t + k * math.pi / 2
+            data.mocap_pos[m] = centre + np.array([1.5 * math.cos(a), 1.5 * math.sin(a), 0.0])
+        # the caller's 16 Hz collision check would go here
+
+    t0, wall, results = data.time, time.perf_counter(), []
+    while data.time - t0 < seconds:
+        if rng.random() < 0.5:
+            res = robot.forward(0.5, on_tick=on_tick)
+        else:
+            res = robot.turn(float(rng.choice([TURN, -TURN])), on_tick=on_tick)
+        results.append(res)
+        if res.fell:
+            robot.reset(p[0], p[1], z, float(rng.uniform(0, 2 * math.pi)), settle=0.3)
+    wall = time.perf_counter() - wall
+    return {
+        "scene": "proc-0",
+        "collision_boxes": n_boxes,
+        "people": 4,
+        "physics_seconds": round(data.time - t0, 1),
+        "primitives": len(results),
+        "falls": sum(r.fell for r in results),
+        "timeouts": sum(r.timed_out for r in results),
+        "real_time_factor": round((data.time - t0) / wall, 1),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--primitives", type=int, default=1000)
+    parser.add_argument("--odometry-primitives", type=int, default=None)
+    parser.add_argument("--house-seconds", type=float, default=60.0)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--parts", default="flat,push,odometry,speed,house")
+    args = parser.parse_args()
+    parts = set(args.parts.split(","))
+    n_odo = args.odometry_primitives or max(10, args.primitives // 5)
+    out: dict = {"machine": machine()}
+    t = time.perf_counter()
+    if "flat" in parts:
+        out["flat_truth"] = _run_flat(args.primitives, "truth", False, args.seed)
+    if "push" in parts:
+        out["flat_truth_pushed"] = _run_flat(args.primitives, "truth", True, args.seed + 1)
+    if "odometry" in parts:
+        out["flat_odometry"] = _run_flat(n_odo, "odometry", False, args.seed + 2)
+    if "speed" in parts:
+        out["controller_time"] = _controller_time(args.seed + 3)
+    if "house" in parts:
+        out["house_4_people"] = _house(args.house_seconds, args.seed + 4)
+    out["wall_seconds"] = round(time.perf_counter() - t, 1)
+    print(json.dumps(out, indent=1))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,131 @@
+"""Controller gains of the GO1 trot and primitives, loaded from ``robots/go1/gains.json``."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, fields, replace
+from pathlib import Path
+
+from havln_mj.errors import InvalidArgumentError, MalformedDataError
+from havln_mj.paths import asset_path
+
+
+@dataclass(frozen=True)
+class Go1Gains:
+    """Gait, velocity-loop and primitive gains (SI units, radians).
+
+    Attributes:
+        period: Trot cycle (s); each diagonal pair swings for ``(1 - duty) * period``.
+        duty: Stance fraction of the cycle.
+        swing_height: Foot lift (m).
+        foot_depth: Nominal foot depth below the hip joints (m).
+        touchdown_depth: How far below nominal a swing foot aims to land (m).
+        foot_x_offset: Nominal feet shift forward of the hips (m); trims the trot's drift.
+        raibert_gain: Foot placement gain on velocity error (s), for balance.
+        ki_velocity: Integral gain of the linear velocity loop (1/s).
+        ki_yaw_rate: Integral gain of the yaw-rate loop (1/s); 0 by default, as its wind-up
+            made turns overshoot and spring back by up to 5°.
+        integral_limit_velocity: Clip of the velocity integral (m/s).
+        integral_limit_yaw_rate: Clip of the yaw-rate integral (rad/s).
+        velocity_filter: Time constant of the measured-velocity low-pass (s).
+        forward_kp: P gain on remaining distance (1/s).
+        forward_v_max: Cruise speed cap (m/s).
+        forward_v_min: Speed floor while the target is not reached (m/s).
+        forward_k_lateral: Lateral offset hold gain (1/s).
+        forward_k_yaw: Heading hold gain while walking (1/s).
+        forward_stop: Stop when this close to the target distance (m).
+        forward_lead: Stop earlier by this many seconds of the measured speed (s).
+        turn_kp: P gain on remaining yaw (1/s).
+        turn_w_max: Yaw-rate cap (rad/s).
+        turn_w_min: Yaw-rate floor while turning (rad/s).
+        turn_k_hold: Position hold gain while turning (1/s).
+        turn_stop: Stop when this close to the target yaw (rad).
+        turn_lead: Stop earlier by this many seconds of the measured yaw rate (s).
+        settle: Standing time after the feet are back home (s).
+        control_decimation: Physics steps per controller update (1 = 500 Hz control).
+        tick_period: Physics time between ``on_tick`` calls (s); at most 1/16.
+    """
+
+    period: float = 0.4
+    duty: float = 0.5
+    swing_height: float = 0.07
+    foot_depth: float = 0.27
+    touchdown_depth: float = 0.005
+    foot_x_offset: float = 0.0
+    raibert_gain: float = 0.05
+    ki_velocity: float = 3.0
+    ki_yaw_rate: float = 0.0
+    integral_limit_velocity: float = 0.25
+    integral_limit_yaw_rate: float = 0.6
+    velocity_filter: float = 0.05
+    forward_kp: float = 2.5
+    forward_v_max: float = 0.5
+    forward_v_min: float = 0.1
+    forward_k_lateral: float = 1.0
+    forward_k_yaw: float = 2.0
+    forward_stop: float = 0.003
+    forward_lead: float = 0.05
+    turn_kp: float = 4.0
+    turn_w_max: float = 1.2
+    turn_w_min: float = 0.4
+    turn_k_hold: float = 1.0
+    turn_stop: float = 0.0175
+    turn_lead: float = 0.05
+    settle: float = 0.2
+    control_decimation: int = 1
+    tick_period: float = 0.05
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if not (isinstance(value, int | float) and math.isfinite(value)) or (
+                value < 0 and f.name != "foot_x_offset"
+            ):
+                raise InvalidArgumentError(
+                    f"gain {f.name} must be a finite number >= 0, got {value!r}"
+                )
+        if not 0.2 <= self.duty <= 0.8:
+            raise InvalidArgumentError(f"duty must be in [0.2, 0.8], got {self.duty}")
+        if not 0.1 <= self.period <= 2.0:
+            raise InvalidArgumentError(f"period must be in [0.1, 2] s, got {self.period}")
+        if not 0.15 <= self.foot_depth <= 0.4:
+            raise InvalidArgumentError(
+                f"foot_depth must be in [0.15, 0.4] m, got {self.foot_depth}"
+            )
+        if not (isinstance(self.control_decimation, int) and self.control_decimation >= 1):
+            raise InvalidArgumentError(
+                f"control_decimation must be an integer >= 1, got {self.control_decimation!r}"
+            )
+        if not 0.0 < self.tick_period <= 1.0 / 16.0:
+            raise InvalidArgumentError(
+                f"tick_period must be in (0, 1/16] s (on_tick runs at >= 16 Hz), "
+                f"got {self.tick_period}"
+            )
+
+    def with_(self, **changes: float) -> Go1Gains:
+        """A copy with some gains changed."""
+        return replace(self, **changes)
+
+
+def load_gains(path: str | Path | None = None) -> Go1Gains:
+    """Reads gains from a JSON object of ``Go1Gains`` fields (default: the shipped file).
+
+    Keys starting with ``_`` are comments. Missing keys keep their defaults.
+
+    Raises:
+        MalformedDataError: Unknown keys or not a JSON object.
+    """
+    path = Path(path) if path is not None else asset_path("robots", "go1", "gains.json")
+    try:
+        raw = json.loads(Path(path).read_text())
+    except json.JSONDecodeError as err:
+        raise MalformedDataError(f"{path} is not valid JSON: {err}") from err
+    if not isinstance(raw, dict):
+        raise MalformedDataError(f"{path} must hold a JSON object of gains")
+    names = {f.name for f in fields(Go1Gains)}
+    values = {k: v for k, v in raw.items() if not k.startswith("_")}
+    unknown = sorted(set(values) - names)
+    if unknown:
+        raise MalformedDataError(f"{path}: unknown gains {unknown}; valid: {sorted(names)}")
+    return Go1Gains(**values)

@@ -1,0 +1,462 @@
+"""The GO1 as a navigation agent: ``forward(d)`` and ``turn(theta)`` closed on a state estimate.
+
+Each primitive runs the trot at physics rate (500 Hz by default) under an outer loop: forward
+is P on the remaining distance (clipped to a speed floor and cap) while holding the start
+heading and lateral offset; turn is P on the remaining yaw while holding the start position.
+On reaching the target the gait brings every foot home, then the robot stands ``settle``
+seconds before the result is measured. A fall (trunk tipped or low) or a time-out ends a
+primitive early with a flag. ``on_tick(sim_time)`` runs every ``tick_period`` of physics time
+(20 Hz by default) so callers can move people and check collisions while the robot walks.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import mujoco
+
+from havln_mj.errors import InvalidArgumentError, did_you_mean
+from havln_mj.frames import wrap_angle, wrap_heading
+from havln_mj.robot.go1 import constants as const
+from havln_mj.robot.go1.estimator import ESTIMATES, OdometryEstimator, TruthEstimator, quat_yaw
+from havln_mj.robot.go1.gains import Go1Gains, load_gains
+from havln_mj.robot.go1.gait import TrotGait
+
+OnTick = Callable[[float], None]
+MAX_DISTANCE = 10.0  # metres, per forward primitive
+MAX_TURN = 2.0 * math.pi  # radians, per turn primitive
+MAX_STAND = 600.0  # seconds
+# Blocked: no progress by this much in this long ends a primitive (a robot pushing on a wall
+# would otherwise rear up and fall).
+STALL_SECONDS = 1.0
+STALL_DISTANCE = 0.02  # m
+STALL_ANGLE = 0.05  # rad
+
+
+class _Stall:
+    """Flags a primitive whose progress has not grown for a while."""
+
+    def __init__(self, data: mujoco.MjData, seconds: float, amount: float) -> None:
+        self.data, self.seconds, self.amount = data, seconds, amount
+        self.best = 0.0
+        self.since = data.time
+        self.stalled = False
+
+    def check(self, progress: float) -> bool:
+        """Records progress; True once it has stalled."""
+        if progress > self.best + self.amount:
+            self.best, self.since = progress, self.data.time
+        elif self.data.time - self.since > self.seconds:
+            self.stalled = True
+        return self.stalled
+
+
+@dataclass(frozen=True)
+class Go1Pose:
+    """A trunk pose. ``heading`` follows :mod:`havln_mj.frames` (0 = +y, turning right)."""
+
+    x: float
+    y: float
+    z: float
+    yaw: float
+    heading: float
+
+
+@dataclass(frozen=True)
+class PrimitiveResult:
+    """What a primitive did.
+
+    Attributes:
+        kind: ``"forward"``, ``"turn"`` or ``"stand"``.
+        target: Asked distance (m) or heading change (rad, + right).
+        distance: True displacement along the start heading (m).
+        lateral: True displacement across the start heading (m, + left).
+        heading_change: True heading change (rad, + right).
+        est_distance: ``distance`` according to the controller's estimate.
+        est_lateral: ``lateral`` according to the estimate.
+        est_heading_change: ``heading_change`` according to the estimate.
+        duration: Physics time (s), settling included.
+        steps: Physics steps taken.
+        fell: The robot fell (tipped over or trunk too low); it needs a ``reset``.
+        timed_out: The target was not reached: out of time, or no progress for 1 s (e.g.
+            blocked by a wall).
+    """
+
+    kind: str
+    target: float
+    distance: float
+    lateral: float
+    heading_change: float
+    est_distance: float
+    est_lateral: float
+    est_heading_change: float
+    duration: float
+    steps: int
+    fell: bool
+    timed_out: bool
+
+    @property
+    def error(self) -> float:
+        """Achieved minus target: metres for forward, radians for turn, 0 for stand."""
+        if self.kind == "forward":
+            return self.distance - self.target
+        if self.kind == "turn":
+            return wrap_angle(self.heading_change - self.target)
+        return 0.0
+
+
+def _clip(v: float, lo: float, hi: float) -> float:
+    return lo if v < lo else hi if v > hi else v
+
+
+def _check_finite(name: str, value: float, limit: float, lo: float | None = None) -> float:
+    lo = -limit if lo is None else lo
+    if not (isinstance(value, int | float) and math.isfinite(value) and lo <= value <= limit):
+        raise InvalidArgumentError(f"{name} must be a number in [{lo}, {limit}], got {value!r}")
+    return float(value)
+
+
+class Go1Body:
+    """Controls one attached GO1 (see :func:`havln_mj.robot.go1.model.add_go1`).
+
+    Args:
+        model: The compiled world with the robot.
+        data: Its data; primitives step it.
+        prefix: The robot's attach prefix.
+        estimate: ``"truth"`` (simulator pose) or ``"odometry"`` (gyro + leg kinematics, drifts).
+        gains: Controller gains (default: ``robots/go1/gains.json``).
+    """
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        prefix: str = "go1/",
+        estimate: str = "truth",
+        gains: Go1Gains | None = None,
+    ) -> None:
+        if estimate not in ESTIMATES:
+            raise InvalidArgumentError(
+                f"estimate {estimate!r} unknown; valid: {', '.join(ESTIMATES)}"
+            )
+        names = [model.body(i).name for i in range(model.nbody)]
+        trunk = prefix + const.TRUNK
+        if trunk not in names:
+            trunks = [n for n in names if n.endswith(const.TRUNK)]
+            raise InvalidArgumentError(
+                f"no GO1 with prefix {prefix!r} (body {trunk!r}) in the model; trunks found: "
+                f"{trunks}.{did_you_mean(trunk, trunks)}"
+            )
+        if model.opt.timestep > 0.0025:
+            raise InvalidArgumentError(
+                f"the GO1 needs a timestep <= 0.0025 s, the model has {model.opt.timestep}"
+            )
+        self.model, self.data, self.prefix = model, data, prefix
+        self.gains = gains or load_gains()
+        self.trunk_id = model.body(trunk).id
+        jnt = model.body_jntadr[self.trunk_id]
+        if jnt < 0 or model.jnt_type[jnt] != mujoco.mjtJoint.mjJNT_FREE:
+            raise InvalidArgumentError(f"body {trunk!r} has no free joint")
+        self.qadr = int(model.jnt_qposadr[jnt])
+        self.dadr = int(model.jnt_dofadr[jnt])
+        self.joint_qadr = [int(model.joint(prefix + n).qposadr[0]) for n in const.JOINTS]
+        self.joint_dadr = [int(model.joint(prefix + n).dofadr[0]) for n in const.JOINTS]
+        self.act_ids = [model.actuator(prefix + n).id for n in const.ACTUATORS]
+        a0 = self.act_ids[0]
+        self._act_slice = slice(a0, a0 + 12) if self.act_ids == list(range(a0, a0 + 12)) else None
+        self.foot_ids = [model.geom(prefix + n).id for n in const.FOOT_GEOMS]
+        gyro = model.sensor(prefix + const.GYRO)
+        self.gyro_adr = int(gyro.adr[0])
+        self.estimate = estimate
+        if estimate == "truth":
+            self.est: TruthEstimator = TruthEstimator(model, data, self.qadr, self.dadr)
+        else:
+            self.est = OdometryEstimator(
+                model, data, self.qadr, self.dadr, self.gyro_adr, self.joint_qadr
+            )
+        self._truth = TruthEstimator(model, data, self.qadr, self.dadr)
+        self.gait = TrotGait(self.gains)
+        self.fallen = False
+        self._vx = self._vy = self._wz = 0.0  # filtered measured velocity
+        self._ix = self._iy = self._iw = 0.0  # velocity-loop integrals
+        self.est.reset()
+
+    # ----------------------------------------------------------------- state
+
+    def pose(self) -> Go1Pose:
+        """The controller's pose estimate (ground truth in ``"truth"`` mode)."""
+        e = self.est
+        return Go1Pose(e.x, e.y, e.z, e.yaw, wrap_heading(const.HALF_PI - e.yaw))
+
+    def true_pose(self) -> Go1Pose:
+        """The simulator's trunk pose."""
+        x, y, z, *q = self._truth.truth()
+        yaw = quat_yaw(*q)
+        return Go1Pose(x, y, z, yaw, wrap_heading(const.HALF_PI - yaw))
+
+    def is_fallen(self) -> bool:
+        """Whether the trunk is tipped (up axis z < 0.5) or low (< 0.12 m over its feet)."""
+        d = self.data
+        if d.xmat[self.trunk_id, 8] < const.FALL_UP_Z:
+            return True
+        lowest = min(d.geom_xpos[g, 2] for g in self.foot_ids) - const.FOOT_RADIUS
+        return d.xpos[self.trunk_id, 2] - lowest < const.FALL_HEIGHT
+
+    def reset(
+        self, x: float, y: float, z_floor: float, heading: float, settle: float = 0.5
+    ) -> None:
+        """Teleports the robot to stand at a floor point, feet home, then lets it settle.
+
+        Args:
+            x: Trunk x (m).
+            y: Trunk y (m).
+            z_floor: Floor height under the robot (m).
+            heading: Heading (rad, 0 = +y, turning right).
+            settle: Standing time after the teleport (s; physics time advances).
+        """
+        for name, v in (("x", x), ("y", y), ("z_floor", z_floor), ("heading", heading)):
+            _check_finite(name, v, 1e6)
+        _check_finite("settle", settle, MAX_STAND, 0.0)
+        yaw = const.HALF_PI - heading
+        m, d = self.model, self.data
+        a = self.qadr
+        d.qpos[a : a + 7] = (
+            x,
+            y,
+            z_floor + self.gains.foot_depth + const.FOOT_RADIUS + 0.002,
+            math.cos(yaw / 2),
+            0.0,
+            0.0,
+            math.sin(yaw / 2),
+        )
+        self.gait = TrotGait(self.gains)
+        home = self.gait.step(0.0, 0.0, 0.0, 0.0)
+        for qa, q in zip(self.joint_qadr, home, strict=True):
+            d.qpos[qa] = q
+        d.qvel[self.dadr : self.dadr + 6] = 0.0
+        for da in self.joint_dadr:
+            d.qvel[da] = 0.0
+        self._write_ctrl(home)
+        mujoco.mj_forward(m, d)
+        self.fallen = False
+        self._vx = self._vy = self._wz = 0.0
+        self._ix = self._iy = self._iw = 0.0
+        self.est.reset()
+        self._truth.reset()
+        if settle > 0:
+            self.stand(settle)
+
+    def _write_ctrl(self, q: list[float]) -> None:
+        if self._act_slice is not None:
+            self.data.ctrl[self._act_slice] = q
+        else:
+            self.data.ctrl[self.act_ids] = q
+
+    # ------------------------------------------------------------ primitives
+
+    def stand(self, seconds: float, *, on_tick: OnTick | None = None) -> PrimitiveResult:
+        """Stands still (feet home) for ``seconds`` of physics time."""
+        seconds = _check_finite("seconds", seconds, MAX_STAND, 0.0)
+        end = self.data.time + seconds - 1e-9
+
+        def command(hold: bool) -> tuple[float, float, float, bool]:
+            return 0.0, 0.0, 0.0, self.data.time >= end
+
+        return self._run("stand", 0.0, command, seconds + 1.0, on_tick, walk=False)
+
+    def forward(self, distance: float, *, on_tick: OnTick | None = None) -> PrimitiveResult:
+        """Walks ``distance`` metres along the current heading (negative walks backwards).
+
+        Returns when the estimate is within ``forward_stop`` of the target and the robot
+        stands again, on a fall, or after ``2 + |distance| / forward_v_min`` seconds.
+        """
+        distance = _check_finite("distance", distance, MAX_DISTANCE)
+        g = self.gains
+        e = self.est
+        x0, y0, yaw0 = e.x, e.y, e.yaw
+        c0, s0 = math.cos(yaw0), math.sin(yaw0)
+        sign = 1.0 if distance >= 0 else -1.0
+        stall = _Stall(self.data, STALL_SECONDS, STALL_DISTANCE)
+
+        def command(hold: bool) -> tuple[float, float, float, bool]:
+            dx, dy = e.x - x0, e.y - y0
+            along = c0 * dx + s0 * dy
+            lat = -s0 * dx + c0 * dy
+            dyaw = wrap_angle(e.yaw - yaw0)
+            rem = distance - along
+            # Stop a little early: the trunk coasts on while the last feet come down.
+            done = rem * sign < g.forward_stop + g.forward_lead * abs(self._vx)
+            done = stall.check(sign * along) or done
+            if hold or done:  # no speed floor: creep back or forward onto the target
+                v = _clip(g.forward_kp * rem, -g.forward_v_min, g.forward_v_min)
+            else:
+                v = sign * _clip(g.forward_kp * abs(rem), g.forward_v_min, g.forward_v_max)
+            vl = _clip(-g.forward_k_lateral * lat, -0.15, 0.15)
+            w = _clip(-g.forward_k_yaw * dyaw, -0.5, 0.5)
+            cd, sd = math.cos(dyaw), math.sin(dyaw)
+            return cd * v + sd * vl, -sd * v + cd * vl, w, done
+
+        timeout = 2.0 + abs(distance) / max(g.forward_v_min, 1e-3)
+        result = self._run("forward", distance, command, timeout, on_tick)
+        return replace(result, timed_out=True) if stall.stalled else result
+
+    def turn(self, theta: float, *, on_tick: OnTick | None = None) -> PrimitiveResult:
+        """Turns in place by ``theta`` radians of heading (positive turns right).
+
+        Returns when the estimated heading is within ``turn_stop`` of the target and the
+        robot stands again, on a fall, or after ``2 + |theta| / turn_w_min`` seconds.
+        """
+        theta = _check_finite("theta", theta, MAX_TURN)
+        g = self.gains
+        e = self.est
+        x0, y0, yaw0 = e.x, e.y, e.yaw
+        target = -theta  # yaw grows turning left
+        sign = 1.0 if target >= 0 else -1.0
+        turned = [0.0]
+        last = [yaw0]
+        stall = _Stall(self.data, STALL_SECONDS, STALL_ANGLE)
+
+        def command(hold: bool) -> tuple[float, float, float, bool]:
+            turned[0] += wrap_angle(e.yaw - last[0])  # unwrapped, so turns past π work
+            last[0] = e.yaw
+            rem = target - turned[0]
+            done = rem * sign < g.turn_stop + g.turn_lead * abs(self._wz)
+            done = stall.check(sign * turned[0]) or done
+            if hold or done:
+                w = _clip(g.turn_kp * rem, -g.turn_w_min, g.turn_w_min)
+            else:
+                w = sign * _clip(g.turn_kp * abs(rem), g.turn_w_min, g.turn_w_max)
+            # Hold the start point: world correction velocity into the trunk frame.
+            cx, cy = -g.turn_k_hold * (e.x - x0), -g.turn_k_hold * (e.y - y0)
+            c, s = math.cos(e.yaw), math.sin(e.yaw)
+            vx = _clip(c * cx + s * cy, -0.15, 0.15)
+            vy = _clip(-s * cx + c * cy, -0.15, 0.15)
+            return vx, vy, w, done
+
+        timeout = 2.0 + abs(theta) / max(g.turn_w_min, 1e-3)
+        result = self._run("turn", theta, command, timeout, on_tick)
+        return replace(result, timed_out=True) if stall.stalled else result
+
+    # ------------------------------------------------------------- the loop
+
+    def _run(
+        self,
+        kind: str,
+        target: float,
+        command: Callable[[bool], tuple[float, float, float, bool]],
+        timeout: float,
+        on_tick: OnTick | None,
+        walk: bool = True,
+    ) -> PrimitiveResult:
+        """Runs the control loop until ``command`` says done, then stops and settles.
+
+        ``command(hold)`` returns the twist (vx, vy, wz) in the trunk frame and whether the
+        target is reached; ``hold`` asks for the gentle twist used while the feet come down.
+        """
+        m, d, g, e = self.model, self.data, self.gains, self.est
+        t0 = d.time
+        truth0 = self.true_pose()
+        est0 = self.pose()
+        steps = 0
+        timed_out = False
+        if self.fallen or self.is_fallen():
+            self.fallen = True
+            return self._result(kind, target, truth0, est0, t0, steps, False)
+        n = g.control_decimation
+        dt = n * m.opt.timestep
+        alpha = min(1.0, dt / g.velocity_filter) if g.velocity_filter > 0 else 1.0
+        self._ix = self._iy = self._iw = 0.0
+        stage = "walk" if walk else "stand"
+        settle_end = math.inf
+        next_tick = t0 + g.tick_period
+        deadline = t0 + timeout
+        gait = self.gait
+        if walk:
+            gait.start()
+        while True:
+            e.update(dt, gait.stance if gait.walking else [True] * 4)
+            self._vx += alpha * (e.vx - self._vx)
+            self._vy += alpha * (e.vy - self._vy)
+            self._wz += alpha * (e.wz - self._wz)
+            if stage in ("walk", "stand", "stopping"):
+                vx, vy, wz, done = command(stage == "stopping")
+                if stage != "stopping" and (done or d.time >= deadline):
+                    timed_out = not done
+                    gait.request_stop()
+                    self._iw = 0.0  # the turn's yaw-rate integral would carry it past
+                    stage = "stopping"
+            if stage == "stopping" and not gait.walking:
+                stage = "settle"
+                settle_end = d.time + (g.settle if walk else 0.0)
+            if stage == "settle" and d.time >= settle_end - 1e-9:
+                break
+            if gait.walking:
+                self._ix = _clip(
+                    self._ix + g.ki_velocity * (vx - self._vx) * dt,
+                    -g.integral_limit_velocity,
+                    g.integral_limit_velocity,
+                )
+                self._iy = _clip(
+                    self._iy + g.ki_velocity * (vy - self._vy) * dt,
+                    -g.integral_limit_velocity,
+                    g.integral_limit_velocity,
+                )
+                self._iw = _clip(
+                    self._iw + g.ki_yaw_rate * (wz - self._wz) * dt,
+                    -g.integral_limit_yaw_rate,
+                    g.integral_limit_yaw_rate,
+                )
+                q = gait.step(
+                    dt, vx + self._ix, vy + self._iy, wz + self._iw, self._vx - vx, self._vy - vy
+                )
+            else:
+                q = gait.step(dt, 0.0, 0.0, 0.0)
+            self._write_ctrl(q)
+            mujoco.mj_step(m, d, n)
+            steps += n
+            if self.is_fallen():
+                self.fallen = True
+                gait.walking = False
+                break
+            if on_tick is not None and d.time >= next_tick - 1e-9:
+                on_tick(d.time)
+                next_tick += g.tick_period
+            if d.time > deadline + 2.0:  # the stop itself cannot finish (should not happen)
+                timed_out = True
+                break
+        e.update(dt, [True] * 4)
+        return self._result(kind, target, truth0, est0, t0, steps, timed_out)
+
+    def _result(
+        self,
+        kind: str,
+        target: float,
+        truth0: Go1Pose,
+        est0: Go1Pose,
+        t0: float,
+        steps: int,
+        timed_out: bool,
+    ) -> PrimitiveResult:
+        def measure(p0: Go1Pose, p1: Go1Pose) -> tuple[float, float, float]:
+            c, s = math.cos(p0.yaw), math.sin(p0.yaw)
+            dx, dy = p1.x - p0.x, p1.y - p0.y
+            return c * dx + s * dy, -s * dx + c * dy, -wrap_angle(p1.yaw - p0.yaw)
+
+        along, lat, dh = measure(truth0, self.true_pose())
+        e_along, e_lat, e_dh = measure(est0, self.pose())
+        return PrimitiveResult(
+            kind=kind,
+            target=target,
+            distance=along,
+            lateral=lat,
+            heading_change=dh,
+            est_distance=e_along,
+            est_lateral=e_lat,
+            est_heading_change=e_dh,
+            duration=self.data.time - t0,
+            steps=steps,
+            fell=self.fallen,
+            timed_out=timed_out,
+        )
