@@ -21,6 +21,7 @@ import json
 import math
 import os
 import time
+from pathlib import Path
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
@@ -227,13 +228,69 @@ def _house(seconds: float, seed: int, physical: bool) -> dict:
     }
 
 
+def _stairs(data: Path, scan_id: str, edges: int, seed: int) -> dict:
+    """The GO1 walking the climbing edges (|Δfloor| > 0.3 m) of a real building's graph proxy."""
+    from havln_mj.scene.scan import load_scan
+    from havln_mj.sim.crowd import NO_CROWD
+    from havln_mj.sim.legged import LeggedAgent, LeggedOptions, LeggedWorld
+    from havln_mj.sim.world import WorldOptions
+
+    conn = data / "mp3d_connectivity"
+    if not conn.is_dir():
+        return {"skipped": f"no connectivity graphs at {conn}"}
+    scan = load_scan(scan_id, connectivity_dir=conn)
+    g = scan.graph
+    climbs = [(a, b) for a, b, _ in g.edges() if abs(g.floor_z(a) - g.floor_z(b)) > 0.3]
+    rng = np.random.default_rng(seed)
+    picks = [climbs[int(k)] for k in rng.permutation(len(climbs))[:edges]]
+    world = LeggedWorld(scan, WorldOptions(collision="boxes"), NO_CROWD, LeggedOptions())
+    agent = LeggedAgent(world)
+    rows = []
+    for a, b in picks:
+        for src, dst in ((a, b), (b, a)):
+            agent.place(g.position(src), g.floor_z(src), 0.0, 0.0)
+            target = np.append(g.position(dst)[:2], g.floor_z(dst))
+            out = agent.go_to(target, None, 0.0)
+            end = agent.position()
+            rows.append(
+                {
+                    "rise_m": round(g.floor_z(dst) - g.floor_z(src), 2),
+                    "run_m": round(float(np.hypot(*(target[:2] - g.position(src)[:2]))), 2),
+                    "end_error_m": round(float(np.hypot(*(end[:2] - target[:2]))), 3),
+                    "fell": out.fell,
+                    "seconds": round(out.duration, 1),
+                }
+            )
+    reached = [r for r in rows if not r["fell"] and r["end_error_m"] < 0.3]
+    return {
+        "scene": scan_id,
+        "kind": scan.kind,
+        "climbing_edges_in_graph": len(climbs),
+        "walks": len(rows),
+        "reached_within_0.3m": len(reached),
+        "falls": sum(r["fell"] for r in rows),
+        "rows": rows,
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--primitives", type=int, default=1000)
     parser.add_argument("--odometry-primitives", type=int, default=None)
     parser.add_argument("--house-seconds", type=float, default=60.0)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--parts", default="flat,push,odometry,speed,house")
+    parser.add_argument("--parts", default="flat,push,odometry,speed,house,stairs")
+    parser.add_argument(
+        "--data",
+        type=Path,
+        default=Path(
+            os.environ.get(
+                "HAVLN_SHARED_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"
+            )
+        ),
+    )
+    parser.add_argument("--stairs-scan", default="17DRP5sb8fy")
+    parser.add_argument("--stairs-edges", type=int, default=10)
     args = parser.parse_args()
     parts = set(args.parts.split(","))
     n_odo = args.odometry_primitives or max(10, args.primitives // 5)
@@ -251,6 +308,8 @@ def main() -> None:
         out["house_4_people"] = [
             _house(args.house_seconds, args.seed + 4, physical) for physical in (False, True)
         ]
+    if "stairs" in parts:
+        out["stairs_proxy"] = _stairs(args.data, args.stairs_scan, args.stairs_edges, args.seed + 5)
     out["wall_seconds"] = round(time.perf_counter() - t, 1)
     print(json.dumps(out, indent=1))
 

@@ -31,10 +31,12 @@ from havln_mj.humans.mujoco_people import PeopleWriter, add_people
 from havln_mj.render.camera import Camera
 from havln_mj.robot.go1.model import add_go1
 from havln_mj.robot.go1.primitives import Go1Body, OnTick, PrimitiveResult
-from havln_mj.scene.scan import Scan
+from havln_mj.scene.navgraph import LEVEL_GAP
+from havln_mj.scene.navgrid import NavGrid, build_navgrids
+from havln_mj.scene.scan import Scan, floor_heights
 from havln_mj.sim.crowd import NO_CROWD, Crowd, Proximity, track_proximity
 from havln_mj.sim.rendering import View, ViewSettings
-from havln_mj.sim.world import WorldOptions, world_spec
+from havln_mj.sim.world import WorldOptions, build_world, world_spec
 
 PREFIX = "go1/"
 
@@ -113,6 +115,24 @@ class LeggedWorld:
         ]
         self.robot_geoms = np.flatnonzero(np.isin(self.model.geom_bodyid, robot_bodies))
         self.camera = self.handles.camera
+        self._grids: list[tuple[float, NavGrid]] | None = None
+
+    def geodesic(self, start: np.ndarray, goal: np.ndarray) -> float:
+        """Walking distance between two floor points on one level (``inf`` if none).
+
+        From the level's navigability grid (collision geometry at robot height, 5 cm cells),
+        built on first use from the building alone; points on different levels give ``inf``.
+        """
+        if self._grids is None:
+            floors = floor_heights(self.scan)
+            world = build_world(self.scan, _with_collision(WorldOptions(), self.collision))
+            self._grids = list(zip(floors, build_navgrids(world, floors), strict=True))
+        if not self._grids or abs(start[2] - goal[2]) > LEVEL_GAP:
+            return math.inf
+        floor, grid = min(self._grids, key=lambda fg: abs(fg[0] - goal[2]))
+        if abs(floor - goal[2]) > LEVEL_GAP:
+            return math.inf
+        return grid.distance(start[:2], goal[:2])
 
 
 CHASE_CAMERA = PREFIX + "chase"

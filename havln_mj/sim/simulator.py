@@ -662,6 +662,32 @@ class Simulator:
         self._publish(changed, near)
         self._timers["process"] += time.perf_counter() - t0
 
+    def getGeodesicDistance(self, viewpointId: Sequence[str]) -> list[float]:  # noqa: N802, N803
+        """Each element's walking distance to a viewpoint (metres, ``inf`` if unreachable).
+
+        With the GO1 it is measured from the robot's true position on the level's
+        navigability grid (falling back to the graph when the viewpoint is on another
+        level); with the point body it is the graph's geodesic from the current viewpoint.
+
+        Raises:
+            UnknownViewpointError: A viewpoint is unknown or excluded.
+        """
+        agents = self._running()
+        out = []
+        for a, vp in zip(agents, self._batch("viewpointId", viewpointId), strict=True):
+            graph = a.table.graph
+            here = a.navigable[0].viewpointId
+            d = graph.distance(here, vp)
+            if a.legged is not None:
+                goal = np.append(graph.position(vp)[:2], graph.floor_z(vp))
+                p = a.legged.position()
+                start = np.array([p[0], p[1], graph.floor_z(here)])
+                world = self._legged_worlds[a.table.scan_id][0]
+                on_grid = world.geodesic(start, goal)
+                d = on_grid if math.isfinite(on_grid) else d
+            out.append(float(d))
+        return out
+
     @staticmethod
     def _nearest_viewpoint(a: _Agent) -> str:
         """The included viewpoint nearest the robot, preferring ones on its floor."""
@@ -782,5 +808,6 @@ class Simulator:
     make_action = makeAction
     make_ego_action = makeEgoAction
     make_robot_action = makeRobotAction
+    get_geodesic_distance = getGeodesicDistance
     get_state = getState
     get_human_state = getHumanState

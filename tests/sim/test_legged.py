@@ -140,3 +140,15 @@ def test_images_come_from_the_robot_camera(edge):
     assert not np.array_equal(level.rgb, up.rgb)
     np.testing.assert_allclose(up.pose[:2], level.pose[:2], atol=0.05)
     sim.close()
+
+
+def test_geodesic_distance_from_the_robot(graph, edge):
+    a, b, h = edge
+    sim = _sim()
+    sim.newEpisode([SCAN], [a], [h], [0.0])
+    (d0,) = sim.getGeodesicDistance([b])
+    straight = float(np.hypot(*(graph.position(b)[:2] - graph.position(a)[:2])))
+    assert straight - 0.1 <= d0 <= straight + 0.3  # an unobstructed edge: nearly straight
+    sim.makeRobotAction(["forward"])
+    (d1,) = sim.get_geodesic_distance([b])
+    assert d1 == pytest.approx(d0 - 0.5, abs=0.1)  # the robot walked half a metre toward b
