@@ -35,7 +35,7 @@ from havln_mj.scene.navgraph import LEVEL_GAP
 from havln_mj.scene.navgrid import NavGrid, build_navgrids
 from havln_mj.scene.scan import Scan, floor_heights
 from havln_mj.sim.crowd import NO_CROWD, Crowd, Proximity, track_proximity
-from havln_mj.sim.rendering import View, ViewSettings
+from havln_mj.sim.rendering import View, ViewSettings, shoot
 from havln_mj.sim.world import WorldOptions, build_world, world_spec
 
 PREFIX = "go1/"
@@ -328,13 +328,10 @@ class LeggedView:
         model.cam_quat[self._cam_id] = quat
         mujoco.mj_kinematics(model, agent.data)
         mujoco.mj_camlight(model, agent.data)
-        frame = self._camera.render(agent.data, rgb=True, depth=settings.depth)
-        model.cam_quat[self._cam_id] = self._base_quat
-        mask = None
-        if settings.human_mask:
-            ids = self._camera.render_geom_ids(agent.data)
-            mask = (ids >= 0) & self._human_geoms[np.maximum(ids, 0)]
-        return View(frame.rgb, frame.depth, mask)
+        try:
+            return shoot(self._camera, agent.data, settings, self._human_geoms)
+        finally:
+            model.cam_quat[self._cam_id] = self._base_quat
 
     def close(self) -> None:
         """Releases the camera."""

@@ -62,6 +62,25 @@ class View:
     human_mask: np.ndarray | None
 
 
+def shoot(
+    camera: Camera, data: mujoco.MjData, settings: ViewSettings, human_geoms: np.ndarray
+) -> View:
+    """Renders ``data`` (kinematics done) with ``camera``; the human mask when asked for.
+
+    Args:
+        camera: The camera.
+        data: The posed state.
+        settings: Whether depth and the mask are wanted.
+        human_geoms: Per model geom, whether it belongs to a person.
+    """
+    frame = camera.render(data, rgb=True, depth=settings.depth)
+    mask = None
+    if settings.human_mask:
+        ids = camera.render_geom_ids(data)
+        mask = (ids >= 0) & human_geoms[np.maximum(ids, 0)]
+    return View(frame.rgb, frame.depth, mask)
+
+
 class SceneView:
     """A scan's world with its people and the point-body camera, rendered one pose at a time."""
 
@@ -117,12 +136,7 @@ class SceneView:
                 self._camera.upload_mesh(mesh)
         self._body.set_pose(position, heading, elevation)
         self._body.write(self.world.model, self.data)  # runs kinematics for everything
-        frame = self._camera.render(self.data, rgb=True, depth=self._settings.depth)
-        mask = None
-        if self._settings.human_mask:
-            ids = self._camera.render_geom_ids(self.data)
-            mask = (ids >= 0) & self._human_geoms[np.maximum(ids, 0)]
-        return View(frame.rgb, frame.depth, mask)
+        return shoot(self._camera, self.data, self._settings, self._human_geoms)
 
     def close(self) -> None:
         """Releases the camera's GL resources."""

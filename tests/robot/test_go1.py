@@ -46,7 +46,7 @@ def test_model_facts() -> None:
         else:
             assert m.geom_group[g] == groups.COLLISION
     foot = m.geom(h.feet[0])
-    assert foot.size[0] == pytest.approx(0.023) and foot.condim[0] == 4 and foot.priority[0] == 1
+    assert foot.size[0] == pytest.approx(0.023) and foot.condim[0] == 6 and foot.priority[0] == 1
     assert m.site(h.imu) is not None
 
 

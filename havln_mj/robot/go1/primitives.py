@@ -371,6 +371,7 @@ class Go1Body:
         stage = "walk" if walk else "stand"
         settle_end = math.inf
         next_tick = t0 + g.tick_period
+        next_fall_check = t0  # falls are checked at 100 Hz: plenty, and a tenth of the cost
         deadline = t0 + timeout
         gait = self.gait
         if walk:
@@ -416,10 +417,12 @@ class Go1Body:
             self._write_ctrl(q)
             mujoco.mj_step(m, d, n)
             steps += n
-            if self.is_fallen():
-                self.fallen = True
-                gait.walking = False
-                break
+            if d.time >= next_fall_check - 1e-9:
+                next_fall_check = d.time + 0.01
+                if self.is_fallen():
+                    self.fallen = True
+                    gait.walking = False
+                    break
             if on_tick is not None and d.time >= next_tick - 1e-9:
                 on_tick(d.time)
                 next_tick += g.tick_period
