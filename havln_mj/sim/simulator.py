@@ -35,7 +35,6 @@ from __future__ import annotations
 
 import math
 import numbers
-import sys
 import time
 import warnings
 import zlib
@@ -86,6 +85,23 @@ ROBOT_ACTIONS = ("stop", "forward", "turn_left", "turn_right")
 DEPTH_UNITS = ("mattersim", "metres")
 
 CrowdFactory = Callable[[str, NavGraph, np.random.Generator], Crowd]
+# The public setter of each locked setting, for the warning when it is called too late.
+_SETTERS = {
+    "dataset_path": "setDatasetPath",
+    "nav_graph_path": "setNavGraphPath",
+    "rendering": "setRenderingEnabled",
+    "discretized": "setDiscretizedViewingAngles",
+    "restricted": "setRestrictedNavigation",
+    "preloading": "setPreloadingEnabled",
+    "depth": "setDepthEnabled",
+    "batch_size": "setBatchSize",
+    "cache_size": "setCacheSize",
+    "seed": "setSeed",
+    "color_order": "set_color_order",
+    "depth_units": "set_depth_units",
+    "human_mask": "set_human_mask_enabled",
+    "world_options": "set_world_options",
+}
 
 
 @dataclass
@@ -236,9 +252,9 @@ class Simulator:
 
     def _set(self, name: str, value: object, *, locked: bool = True) -> None:
         if locked and self._initialized:
-            setter = sys._getframe(1).f_code.co_name  # the public setter that called us
             warnings.warn(
-                f"{setter}() is ignored after initialize(), as in MatterSim; call it before",
+                f"{_SETTERS[name]}() is ignored after initialize(), as in MatterSim; "
+                "call it before",
                 stacklevel=3,
             )
             return
