@@ -298,16 +298,14 @@ def populate_ha3d(
     build = _Builder(rng, sources)
     people = []
     for vp, (text, model_id, degrees) in sorted(entries.items()):
-        if vp not in graph:
-            raise MalformedDataError(
-                f"HA3D placement viewpoint {vp!r} is not an included viewpoint of {graph.name}"
-            )
+        graph.index(vp)  # raises for a viewpoint the scan does not have
         activity = catalog.map_ha3d(text, rng)
         pos, floor = graph.position(vp), graph.floor_z(vp)
         anchor, heading = np.array([pos[0], pos[1], floor]), ha3d_heading(degrees)
         body = build.body()
         haps = (build.sources.haps or {}).get(haps_dir_name(text))
-        walk_to = _walk_targets(graph, vp)
+        # HA3D also stands people on excluded viewpoints; those have no edges to pace along.
+        walk_to = _walk_targets(graph, vp) if vp in graph else []
         if haps:
             clip = haps[model_id % len(haps)]
         else:

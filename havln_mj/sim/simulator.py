@@ -510,6 +510,24 @@ class Simulator:
         cfg = self._cfg
         return cfg.vfov * cfg.width / cfg.height / 2.0
 
+    @property
+    def half_hfov(self) -> float:
+        """Half the horizontal field of view (radians), as MatterSim approximates it.
+
+        ``vfov · width / height / 2``; restricted navigation and FORWARD use it.
+        """
+        return self._half_hfov()
+
+    def graph(self, scan_id: str) -> NavGraph:
+        """The navigation graph the simulator uses for ``scan_id`` (loaded on first use).
+
+        Raises:
+            UnknownScanError: No graph can be found for ``scan_id``.
+        """
+        if not self._initialized:
+            self.initialize()
+        return self._library.table(scan_id).graph
+
     def _cos_half_hfov(self) -> float | None:
         return math.cos(self._half_hfov()) if self._cfg.restricted else None
 

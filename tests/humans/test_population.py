@@ -185,3 +185,19 @@ def test_smpl_model_skins_everyone(blob_smpl):
     for k, person in enumerate(crowd.people):
         # The mesh stands on the person's floor: the lowest joint blob reaches it.
         assert verts[k][:, 2].min() == pytest.approx(person.anchor[2], abs=0.12)
+
+
+def test_people_on_excluded_viewpoints_are_placed_too(shared_data, placements):
+    # HA3D stands some people on excluded (duplicate) viewpoints; they stand there all the same.
+    for scan_id in ("7y3sRwLe3Va", "PX4nDJXEHrG"):
+        graph = NavGraph.from_file(
+            shared_data / "mp3d_connectivity" / f"{scan_id}_connectivity.json"
+        )
+        entries = placements[scan_id]
+        excluded = [vp for vp in entries if vp not in graph]
+        assert excluded
+        crowd = populate_ha3d(graph, entries, np.random.default_rng(0))
+        assert len(crowd) == len(entries)
+        for person in crowd.people:
+            if person.viewpoint in excluded:
+                assert np.hypot(*(person.anchor[:2] - graph.position(person.viewpoint)[:2])) < 1e-9

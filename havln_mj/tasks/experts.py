@@ -1,0 +1,675 @@
+"""Experts that drive the discrete simulator through an episode, and the runner that logs them.
+
+* :class:`ShortestPathExpert`: the optimal teacher. With graph actions it is R2R's
+  ``_shortest_path_action``: move to the next viewpoint of the shortest path when it is listed
+  and within ±30° of the heading, else turn 30° towards it (after levelling the camera); STOP
+  at the goal. With egocentric actions it turns until FORWARD would take the next viewpoint.
+* :class:`HumanAwareExpert`: HA3D's sub-optimal expert. ``mode="local"`` (HA3D's default)
+  re-plans every step on the graph without the nodes within 1 m of the people within 4.5 m of
+  the agent (the current node and the goal kept); ``mode="global"`` plans once on G' = G
+  without the nodes within 1 m of anyone at the start. When no path exists it waits (index 0,
+  no turn) instead of stopping.
+* :class:`RandomWalkExpert`: seeded random egocentric actions, at most 30 steps (VLN-DT data).
+
+:func:`run_expert` runs one episode and returns a :class:`Trajectory`: one record per action
+with the state after it, the collision signal, the simulated time and the rewards of
+:mod:`havln_mj.tasks.rewards`.
+
+Distances to people are horizontal, from a viewpoint (or the agent) to a pelvis, as the
+simulator's collision signal measures them; a person counts only on the viewpoint's storey
+(pelvis between 0.5 m below and 2 m above the viewpoint's floor). Paths are shortest by
+length (HA3D's sub-optimal expert counts hops; ``weighted=False`` does that).
+"""
+
+from __future__ import annotations
+
+import heapq
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Protocol, Union
+
+import numpy as np
+
+from havln_mj.errors import InvalidArgumentError
+from havln_mj.frames import heading_to, wrap_angle
+from havln_mj.scene.navgraph import NavGraph
+from havln_mj.sim.egocentric import DEFAULT_TURN, EgoAction
+from havln_mj.sim.state import SimState
+from havln_mj.tasks.datasets import Episode
+from havln_mj.tasks.rewards import RewardFn, StepOutcome, get_reward
+
+GraphAction = tuple[int, float, float]
+Action = Union[EgoAction, GraphAction]  # noqa: UP007 - a runtime alias; `|` fails on tuple[...]
+STOP = EgoAction.STOP  # ends the episode in either action space
+WAIT: GraphAction = (0, 0.0, 0.0)
+TURN = DEFAULT_TURN  # 30°: one discrete view step, and the teacher's heading tolerance
+SIGHT_RADIUS = 4.5  # metres: HA3D's expert avoids people this close to the agent
+CLEARANCE = 1.0  # metres: nodes this close to such a person are removed
+STOREY_BELOW, STOREY_ABOVE = 0.5, 2.0  # a pelvis this far below / above a floor is on it
+# MatterSim's default camera (VFOV 0.8 rad, 320×240), when the simulator cannot tell.
+DEFAULT_HALF_HFOV = 0.8 * 320 / 240 / 2
+
+
+@dataclass
+class ExpertContext:
+    """What an expert sees of the running episode.
+
+    Attributes:
+        sim: The simulator (batch size 1, episode started).
+        episode: The episode.
+        graph: The scan's navigation graph (the simulator's own).
+        step: Number of actions taken so far.
+    """
+
+    sim: object
+    episode: Episode
+    graph: NavGraph
+    step: int = 0
+
+    @property
+    def goal(self) -> str:
+        """The goal viewpoint."""
+        return self.episode.goal
+
+
+class Expert(Protocol):
+    """An expert policy for :func:`run_expert`.
+
+    Attributes:
+        name: Short name for logs.
+        max_steps: Default cap on actions per episode.
+    """
+
+    name: str
+    max_steps: int
+
+    def reset(self, ctx: ExpertContext) -> None:
+        """Called after ``newEpisode``, before the first action."""
+        ...
+
+    def act(self, ctx: ExpertContext, state: SimState) -> Action:
+        """The next action.
+
+        Returns:
+            An ``EgoAction`` (``STOP`` ends the episode) or a graph action ``(navigable
+            index, dHeading, dElevation)``.
+        """
+        ...
+
+
+# ---------------------------------------------------------------------- geometry and planning
+
+
+def _floors(graph: NavGraph, nodes: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+    xy = np.array([graph.position(v)[:2] for v in nodes]).reshape(-1, 2)
+    return xy, np.array([graph.floor_z(v) for v in nodes])
+
+
+def _near(xy: np.ndarray, floor: np.ndarray, people: np.ndarray, radius: float) -> np.ndarray:
+    """(N,) bool: points (xy, floor height) with a pelvis within ``radius`` on their storey."""
+    if len(people) == 0 or len(xy) == 0:
+        return np.zeros(len(xy), bool)
+    d = np.hypot(xy[:, None, 0] - people[None, :, 0], xy[:, None, 1] - people[None, :, 1])
+    dz = people[None, :, 2] - floor[:, None]
+    return ((d <= radius) & (dz >= -STOREY_BELOW) & (dz <= STOREY_ABOVE)).any(axis=1)
+
+
+def people_near(
+    graph: NavGraph, vp: str, people: Iterable[np.ndarray], radius: float = SIGHT_RADIUS
+) -> np.ndarray:
+    """The pelvis positions ``(K, 3)`` within ``radius`` of viewpoint ``vp``, on its storey."""
+    pts = np.asarray(list(people), float).reshape(-1, 3)
+    xy, floor = _floors(graph, [vp])
+    keep = [bool(_near(xy, floor, p[None], radius)[0]) for p in pts]
+    return pts[np.array(keep, bool)] if len(pts) else pts
+
+
+def blocked_nodes(
+    graph: NavGraph,
+    people: Iterable[np.ndarray],
+    clearance: float = CLEARANCE,
+    keep: Iterable[str] = (),
+) -> set[str]:
+    """The graph nodes within ``clearance`` of any of ``people`` (pelvis positions).
+
+    Nodes in ``keep`` (the agent's and the goal) are never blocked.
+    """
+    pts = np.asarray(list(people), float).reshape(-1, 3)
+    xy, floor = _floors(graph, graph.nodes)
+    hit = _near(xy, floor, pts, clearance)
+    return {graph.nodes[i] for i in np.flatnonzero(hit)} - set(keep)
+
+
+def plan_path(
+    graph: NavGraph,
+    start: str,
+    goal: str,
+    blocked: Iterable[str] = (),
+    *,
+    weighted: bool = True,
+) -> list[str] | None:
+    """A shortest path from ``start`` to ``goal`` avoiding ``blocked`` nodes, or None.
+
+    With nothing blocked and ``weighted`` it is ``graph.shortest_path`` (R2R's choice among
+    equal paths). ``weighted=False`` counts edges, as HA3D's expert does.
+    """
+    blocked = set(blocked) - {start, goal}
+    if not blocked and weighted:
+        return (
+            graph.shortest_path(start, goal) if math.isfinite(graph.distance(start, goal)) else None
+        )
+    order = {v: i for i, v in enumerate(graph.nodes)}
+    best = {start: 0.0}
+    prev: dict[str, str] = {}
+    heap = [(0.0, order[start], start)]
+    while heap:
+        d, _, v = heapq.heappop(heap)
+        if v == goal:
+            path = [goal]
+            while path[-1] != start:
+                path.append(prev[path[-1]])
+            return path[::-1]
+        if d > best[v]:
+            continue
+        for u in graph.neighbors(v):
+            if u in blocked:
+                continue
+            nd = d + (math.dist(graph.position(v), graph.position(u)) if weighted else 1.0)
+            if nd < best.get(u, math.inf):
+                best[u], prev[u] = nd, v
+                heapq.heappush(heap, (nd, order[u], u))
+    return None
+
+
+# ---------------------------------------------------------------------- teachers
+
+
+def graph_teacher(state: SimState, next_vp: str, graph: NavGraph) -> GraphAction:
+    """R2R's teacher action towards the neighbouring viewpoint ``next_vp``.
+
+    Move when it is listed and within ±30° of the heading (looking up or down first when it
+    is more than 30° above or below the camera); otherwise level the camera, then turn 30°
+    towards it.
+    """
+    for i, loc in enumerate(state.navigableLocations[1:], start=1):
+        if loc.viewpointId != next_vp:
+            continue
+        if loc.rel_heading > TURN:
+            return (0, TURN, 0.0)
+        if loc.rel_heading < -TURN:
+            return (0, -TURN, 0.0)
+        if loc.rel_elevation > TURN and state.elevation < TURN / 2:
+            return (0, 0.0, TURN)
+        if loc.rel_elevation < -TURN and state.elevation > -TURN / 2:
+            return (0, 0.0, -TURN)
+        return (i, 0.0, 0.0)
+    if state.elevation > TURN / 2:
+        return (0, 0.0, -TURN)
+    if state.elevation < -TURN / 2:
+        return (0, 0.0, TURN)
+    here = state.location.position
+    rel = wrap_angle(heading_to(here, graph.position(next_vp)) - state.heading)
+    return (0, TURN if rel >= 0 else -TURN, 0.0)
+
+
+def forward_target(
+    graph: NavGraph, here: str, heading: float, elevation: float, half_hfov: float
+) -> str | None:
+    """Where FORWARD goes from ``here`` at ``heading``/``elevation``, or None (it waits).
+
+    The simulator's rule: of the neighbours within ``half_hfov`` of the heading, the one
+    nearest the view centre (``hypot(rel_heading, rel_elevation)``, ties in file order).
+    """
+    x0, y0, z0 = graph.position(here)
+    best, best_key = None, math.inf
+    for vp in graph.neighbors(here):
+        x, y, z = graph.position(vp)
+        flat = math.hypot(x - x0, y - y0)
+        if flat == 0.0:
+            continue  # straight above or below: no bearing, never navigable
+        rel = wrap_angle(math.atan2(x - x0, y - y0) - heading)
+        if abs(rel) > half_hfov:
+            continue
+        key = math.hypot(rel, math.atan2(z - z0, flat) - elevation)
+        if key < best_key:
+            best, best_key = vp, key
+    return best
+
+
+TURN_COST = 1e-3  # metres an egocentric turn "costs": fewest turns among shortest routes
+
+
+def ego_plan(
+    graph: NavGraph, start: str, heading: float, goal: str, half_hfov: float
+) -> list[EgoAction] | None:
+    """The shortest egocentric action sequence from ``start`` at ``heading`` to ``goal``.
+
+    Searches (viewpoint, heading) states, headings 30° apart from ``heading``, with the
+    simulator's FORWARD rule (:func:`forward_target`, camera level): the route is shortest in
+    metres, then in turns. FORWARD cannot reach every neighbour (another one may always be
+    nearer the view centre), so this can differ from the graph's shortest path.
+
+    Returns:
+        The actions, ending with STOP; None when FORWARD and turns cannot reach ``goal``.
+    """
+    n = round(2 * math.pi / TURN)
+    order = {v: i for i, v in enumerate(graph.nodes)}
+    begin = (start, 0)
+    best = {begin: 0.0}
+    prev: dict[tuple[str, int], tuple[tuple[str, int], EgoAction]] = {}
+    heap = [(0.0, order[start], 0, begin)]
+    while heap:
+        d, _, _, node = heapq.heappop(heap)
+        vp, k = node
+        if vp == goal:
+            actions = [EgoAction.STOP]
+            while node != begin:
+                node, action = prev[node]
+                actions.append(action)
+            return actions[::-1]
+        if d > best[node]:
+            continue
+        moves = [((vp, (k + 1) % n), EgoAction.TURN_RIGHT, TURN_COST)]
+        moves.append(((vp, (k - 1) % n), EgoAction.TURN_LEFT, TURN_COST))
+        ahead = forward_target(graph, vp, heading + k * TURN, 0.0, half_hfov)
+        if ahead is not None:
+            length = math.dist(graph.position(vp), graph.position(ahead))
+            moves.append(((ahead, k), EgoAction.FORWARD, length))
+        for nxt, action, cost in moves:
+            nd = d + cost
+            if nd < best.get(nxt, math.inf):
+                best[nxt], prev[nxt] = nd, (node, action)
+                heapq.heappush(heap, (nd, order[nxt[0]], nxt[1], nxt))
+    return None
+
+
+def _sim_half_hfov(sim: object) -> float:
+    # The simulator's own half-HFOV rule decides FORWARD.
+    return float(getattr(sim, "half_hfov", DEFAULT_HALF_HFOV))
+
+
+# ---------------------------------------------------------------------- experts
+
+
+class ShortestPathExpert:
+    """The optimal expert: follows the shortest path to the goal and stops there.
+
+    Args:
+        action_space: ``"graph"`` (``makeAction`` tuples) or ``"ego"`` (``EgoAction``).
+        half_hfov: Half the camera's horizontal field of view, which decides where FORWARD
+            goes (ego only; default: the simulator's).
+        max_steps: Default cap on actions.
+    """
+
+    def __init__(
+        self, action_space: str = "graph", *, half_hfov: float | None = None, max_steps: int = 150
+    ) -> None:
+        if action_space not in ("graph", "ego"):
+            raise InvalidArgumentError(
+                f"action_space {action_space!r} unknown; valid: 'graph', 'ego'"
+            )
+        self.action_space = action_space
+        self.name = f"shortest_{action_space}"
+        self.max_steps = _positive("max_steps", max_steps)
+        self._half_hfov = half_hfov
+        self._hfov = DEFAULT_HALF_HFOV
+        self._plan: list[tuple[EgoAction, str, float]] = []
+
+    def reset(self, ctx: ExpertContext) -> None:
+        """Reads the camera's field of view from the simulator."""
+        self._hfov = self._half_hfov if self._half_hfov is not None else _sim_half_hfov(ctx.sim)
+        self._plan = []
+
+    def _ego(self, ctx: ExpertContext, state: SimState) -> EgoAction:
+        if state.elevation > TURN / 2:
+            return EgoAction.LOOK_DOWN
+        if state.elevation < -TURN / 2:
+            return EgoAction.LOOK_UP
+        here = state.location.viewpointId
+        if self._plan:
+            # Follow the plan while the simulator lands where it was expected to.
+            _, vp, heading = self._plan[0]
+            if vp != here or abs(wrap_angle(heading - state.heading)) > 1e-6:
+                self._plan = []
+        if not self._plan:
+            actions = ego_plan(ctx.graph, here, state.heading, ctx.goal, self._hfov)
+            if actions is None:
+                return STOP  # FORWARD and turns cannot reach the goal from here
+            self._plan = self._expected(ctx.graph, here, state.heading, actions)
+        return self._plan.pop(0)[0]
+
+    def _expected(
+        self, graph: NavGraph, vp: str, heading: float, actions: list[EgoAction]
+    ) -> list[tuple[EgoAction, str, float]]:
+        """Each action with the (viewpoint, heading) it is taken from."""
+        out = []
+        for action in actions:
+            out.append((action, vp, heading))
+            if action is EgoAction.FORWARD:
+                vp = forward_target(graph, vp, heading, 0.0, self._hfov) or vp
+            elif action is EgoAction.TURN_RIGHT:
+                heading += TURN
+            elif action is EgoAction.TURN_LEFT:
+                heading -= TURN
+        return out
+
+    def act(self, ctx: ExpertContext, state: SimState) -> Action:
+        """The next teacher action."""
+        here, goal = state.location.viewpointId, ctx.goal
+        if self.action_space == "ego":
+            return self._ego(ctx, state)
+        if here == goal:
+            return STOP
+        path = plan_path(ctx.graph, here, goal)
+        if path is None:
+            return STOP  # the goal cannot be reached from here at all
+        return graph_teacher(state, path[1], ctx.graph)
+
+
+class HumanAwareExpert:
+    """HA3D's sub-optimal expert: avoids the nodes near people, waits when boxed in.
+
+    Args:
+        mode: ``"local"`` re-plans each step around the people within ``sight_radius`` of
+            the agent; ``"global"`` plans once around everyone (re-planning only while no
+            path exists).
+        sight_radius: How near the agent a person must be to matter (local mode).
+        clearance: Nodes this close to such a person are removed (start and goal kept).
+        weighted: Shortest by length (True) or by number of edges (HA3D).
+        max_steps: Default cap on actions.
+
+    Attributes:
+        last_plan: The path planned at the last step (None when blocked).
+        waits: How many times the expert waited in the current episode.
+    """
+
+    def __init__(
+        self,
+        mode: str = "local",
+        *,
+        sight_radius: float = SIGHT_RADIUS,
+        clearance: float = CLEARANCE,
+        weighted: bool = True,
+        max_steps: int = 150,
+    ) -> None:
+        if mode not in ("local", "global"):
+            raise InvalidArgumentError(f"mode {mode!r} unknown; valid: 'local', 'global'")
+        for name, value in (("sight_radius", sight_radius), ("clearance", clearance)):
+            if not (isinstance(value, int | float) and value >= 0 and math.isfinite(value)):
+                raise InvalidArgumentError(f"{name} must be a finite number ≥ 0, got {value!r}")
+        self.mode = mode
+        self.name = f"human_aware_{mode}"
+        self.sight_radius = float(sight_radius)
+        self.clearance = float(clearance)
+        self.weighted = weighted
+        self.max_steps = _positive("max_steps", max_steps)
+        self.last_plan: list[str] | None = None
+        self.waits = 0
+        self._route: list[str] | None = None
+
+    @staticmethod
+    def _people(ctx: ExpertContext) -> np.ndarray:
+        states = ctx.sim.getHumanState()[0]
+        return np.array([p.position for p in states], float).reshape(-1, 3)
+
+    def _global_route(self, ctx: ExpertContext, here: str) -> list[str] | None:
+        blocked = blocked_nodes(ctx.graph, self._people(ctx), self.clearance, (here, ctx.goal))
+        return plan_path(ctx.graph, here, ctx.goal, blocked, weighted=self.weighted)
+
+    def reset(self, ctx: ExpertContext) -> None:
+        """Plans G' once (global mode)."""
+        self.last_plan, self.waits = None, 0
+        self._route = self._global_route(ctx, ctx.episode.start) if self.mode == "global" else None
+
+    def act(self, ctx: ExpertContext, state: SimState) -> Action:
+        """The next action: teacher towards the planned next node, WAIT when blocked."""
+        here, goal, graph = state.location.viewpointId, ctx.goal, ctx.graph
+        if here == goal:
+            return STOP
+        if self.mode == "local":
+            near = people_near(graph, here, self._people(ctx), self.sight_radius)
+            blocked = blocked_nodes(graph, near, self.clearance, (here, goal))
+            path = plan_path(graph, here, goal, blocked, weighted=self.weighted)
+        else:
+            if self._route is None or here not in self._route:
+                self._route = self._global_route(ctx, here)
+            path = None if self._route is None else self._route[self._route.index(here) :]
+        self.last_plan = path
+        if path is None:
+            self.waits += 1
+            return WAIT
+        return graph_teacher(state, path[1], graph)
+
+
+class RandomWalkExpert:
+    """Random egocentric actions from a seeded generator (VLN-DT's random-walk data).
+
+    Each step draws FORWARD, TURN_LEFT, TURN_RIGHT or STOP with ``probabilities``; the walk
+    stops at the latest on its ``max_steps``-th action.
+
+    Args:
+        rng: The generator every choice comes from.
+        max_steps: Most actions per episode, STOP included (the paper: 30).
+        probabilities: Of FORWARD, TURN_LEFT, TURN_RIGHT, STOP.
+    """
+
+    ACTIONS = (EgoAction.FORWARD, EgoAction.TURN_LEFT, EgoAction.TURN_RIGHT, EgoAction.STOP)
+
+    def __init__(
+        self,
+        rng: np.random.Generator,
+        *,
+        max_steps: int = 30,
+        probabilities: Sequence[float] = (0.5, 0.2, 0.2, 0.1),
+    ) -> None:
+        if not isinstance(rng, np.random.Generator):
+            raise InvalidArgumentError(f"rng must be a numpy.random.Generator, got {rng!r}")
+        p = np.asarray(probabilities, float)
+        if p.shape != (4,) or (p < 0).any() or not math.isclose(p.sum(), 1.0):
+            raise InvalidArgumentError(
+                f"probabilities must be 4 non-negative numbers summing to 1 (FORWARD, "
+                f"TURN_LEFT, TURN_RIGHT, STOP), got {probabilities!r}"
+            )
+        self.rng = rng
+        self.max_steps = _positive("max_steps", max_steps)
+        self.probabilities = p
+        self.name = "random_walk"
+
+    def reset(self, ctx: ExpertContext) -> None:
+        """Nothing to prepare."""
+
+    def act(self, ctx: ExpertContext, state: SimState) -> Action:
+        """A random action; STOP on the last allowed step."""
+        if ctx.step >= self.max_steps - 1:
+            return STOP
+        return self.ACTIONS[int(self.rng.choice(4, p=self.probabilities))]
+
+
+def _positive(name: str, value: object) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise InvalidArgumentError(f"{name} must be an integer ≥ 1, got {value!r}")
+    return value
+
+
+# ---------------------------------------------------------------------- running
+
+
+@dataclass(frozen=True)
+class StepRecord:
+    """The state after one action (or the start state).
+
+    Attributes:
+        action: The action (None for the start state).
+        viewpoint: Viewpoint id after the action.
+        heading: Heading after the action (radians).
+        elevation: Elevation after the action (radians).
+        is_crushed: HA3D's ``isCrushed``: 1 when the action came within the collision
+            distance of a person.
+        crushed_by: Indices of those people in ``getHumanState()``.
+        time: Simulated seconds since the start.
+        distance: Geodesic distance to the goal (metres).
+        rewards: Reward terms by name plus ``"total"`` (empty for the start state).
+    """
+
+    action: Action | None
+    viewpoint: str
+    heading: float
+    elevation: float
+    is_crushed: int
+    crushed_by: tuple[int, ...]
+    time: float
+    distance: float
+    rewards: Mapping[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """An expert's run through one episode.
+
+    Attributes:
+        episode: The episode.
+        expert: The expert's name.
+        records: The start state, then one record per action (STOP included).
+        stopped: Whether the expert chose STOP (False: it hit the step cap).
+    """
+
+    episode: Episode
+    expert: str
+    records: tuple[StepRecord, ...]
+    stopped: bool
+
+    @property
+    def steps(self) -> tuple[StepRecord, ...]:
+        """The records of the actions (without the start state)."""
+        return self.records[1:]
+
+    @property
+    def final_viewpoint(self) -> str:
+        """Where the agent ended."""
+        return self.records[-1].viewpoint
+
+    @property
+    def path(self) -> list[str]:
+        """Viewpoints visited, consecutive repeats merged."""
+        out: list[str] = []
+        for r in self.records:
+            if not out or out[-1] != r.viewpoint:
+                out.append(r.viewpoint)
+        return out
+
+    @property
+    def collisions(self) -> int:
+        """Number of actions with ``isCrushed`` (HA3D's per-step count)."""
+        return sum(r.is_crushed for r in self.records)
+
+    @property
+    def total_reward(self) -> float:
+        """Sum of the step rewards."""
+        return sum(r.rewards.get("total", 0.0) for r in self.records)
+
+    def _moves(self) -> list[StepRecord]:
+        return [r for r in self.records if r.action is not STOP]
+
+    def r2r(self) -> list[list]:
+        """R2R's submission trajectory ``[[viewpoint, heading, elevation], ...]``.
+
+        STOP is left out: it does not change the state.
+        """
+        return [[r.viewpoint, r.heading, r.elevation] for r in self._moves()]
+
+    def ha3d(self) -> list[list]:
+        """HA3D's trajectory ``[[viewpoint, heading, elevation, isCrushed], ...]``."""
+        return [[r.viewpoint, r.heading, r.elevation, r.is_crushed] for r in self._moves()]
+
+    def submission(self, k: int = 0) -> dict:
+        """The R2R results entry ``{"instr_id": "<path_id>_<k>", "trajectory": [...]}``."""
+        return {"instr_id": f"{self.episode.path_id}_{k}", "trajectory": self.r2r()}
+
+
+def _sim_graph(sim: object, scan: str) -> NavGraph:
+    # Sharing the simulator's graph shares the all-pairs distances it has computed.
+    graph = getattr(sim, "graph", None)
+    if not callable(graph):
+        raise InvalidArgumentError(
+            "cannot get the navigation graph from this simulator; pass graph=NavGraph(...)"
+        )
+    return graph(scan)
+
+
+def _record(
+    state: SimState, action: Action | None, distance: float, rewards: Mapping[str, float]
+) -> StepRecord:
+    return StepRecord(
+        action,
+        state.location.viewpointId,
+        float(state.heading),
+        float(state.elevation),
+        int(state.isCrushed),
+        tuple(state.crushedBy),
+        float(state.time),
+        distance,
+        dict(rewards),
+    )
+
+
+def run_expert(
+    sim: object,
+    episode: Episode,
+    expert: Expert,
+    *,
+    graph: NavGraph | None = None,
+    reward: str | RewardFn = "paper",
+    max_steps: int | None = None,
+) -> Trajectory:
+    """Runs ``expert`` through ``episode`` on ``sim`` (batch size 1).
+
+    Starts the episode at its start viewpoint, heading and elevation 0, then asks the expert
+    for actions until it says STOP or ``max_steps`` actions were taken.
+
+    Args:
+        sim: A ``havln_mj.Simulator`` (rendering may be off).
+        episode: The episode.
+        expert: The expert.
+        graph: The scan's graph (default: the simulator's).
+        reward: A reward name of :data:`havln_mj.tasks.rewards.REWARDS` or a function.
+        max_steps: Cap on actions (default: the expert's ``max_steps``).
+
+    Returns:
+        The trajectory, with per-step rewards.
+    """
+    reward_fn = get_reward(reward)
+    cap = _positive("max_steps", expert.max_steps if max_steps is None else max_steps)
+    sim.newEpisode([episode.scan], [episode.start], [episode.heading], [0.0])
+    graph = graph or _sim_graph(sim, episode.scan)
+    ctx = ExpertContext(sim, episode, graph)
+    state = sim.getState()[0]
+    dist = graph.distance(state.location.viewpointId, episode.goal)
+    records = [_record(state, None, dist, {})]
+    expert.reset(ctx)
+    stopped = False
+    while ctx.step < cap:
+        action = expert.act(ctx, state)
+        stopped = action is STOP
+        if not stopped:
+            if isinstance(action, EgoAction):
+                sim.makeEgoAction([action])
+            else:
+                index, dh, de = action
+                sim.makeAction([int(index)], [float(dh)], [float(de)])
+            state = sim.getState()[0]
+        new = graph.distance(state.location.viewpointId, episode.goal)
+        collided = bool(state.isCrushed) and not stopped
+        terms = reward_fn(StepOutcome(stopped, new, new - dist, collided))
+        terms = {**terms, "total": float(sum(terms.values()))}
+        rec = _record(state, action, new, terms)
+        if stopped:  # STOP does not act: no collision, no time
+            rec = StepRecord(
+                STOP, rec.viewpoint, rec.heading, rec.elevation, 0, (), rec.time, new, terms
+            )
+        records.append(rec)
+        dist = new
+        ctx.step += 1
+        if stopped:
+            break
+    return Trajectory(episode, expert.name, tuple(records), stopped)
