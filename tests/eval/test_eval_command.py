@@ -45,3 +45,11 @@ def test_bad_agent_names_the_valid_ones(tmp_path):
     with pytest.raises(InvalidArgumentError, match="shortest"):
         make_agent("teleport")
     assert main(["--scenes", "proc-0", "--agent", "nope:thing", "--out", str(tmp_path)]) == 2
+
+
+def test_the_go1_body_runs_the_same_split(tmp_path):
+    out = tmp_path / "go1"
+    args = "--scenes proc-0 --per-scene 1 --agent shortest --body go1 --no-people"
+    assert main([*args.split(), "--out", str(out)]) == 0
+    (summary,) = json.loads((out / "summary.json").read_text())
+    assert summary["body"] == "go1" and summary["sr"] == 1.0 and summary["collisions"] == 0
