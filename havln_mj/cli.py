@@ -2,6 +2,8 @@
 
 Each scene is built in its own process (scan folder, collision geometry, compiled world), so
 later runs load from the cache at once. Run ``havln_mj scenes build --help`` for options.
+``havln_mj dataset build --scenes <ids...> --split <name>`` writes an HA-R2R style split of
+generated episodes (see :mod:`havln_mj.tasks.procedural`).
 """
 
 from __future__ import annotations
@@ -81,6 +83,20 @@ def scenes_build(args: argparse.Namespace) -> int:
     return 1 if failures else 0
 
 
+def dataset_build(args: argparse.Namespace) -> int:
+    """Generates a split with a progress bar; prints the files and instruction lengths."""
+    from havln_mj.tasks.procedural import build_split
+
+    built = build_split(args.scenes, args.split, args.episodes_per_scene, args.seed, args.out)
+    words = built.word_counts()
+    print(
+        f"wrote {len(built.episodes)} paths, {len(words)} instructions to {built.dataset} "
+        f"and {built.vocab}; words per instruction: mean {sum(words) / len(words):.1f}, "
+        f"min {min(words)}, max {max(words)}"
+    )
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``havln_mj`` command."""
     parser = argparse.ArgumentParser(prog="havln_mj", description=__doc__.splitlines()[0])
@@ -101,11 +117,29 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     build.add_argument("--collision", choices=COLLISION_MODES, default="auto")
     build.add_argument("--workers", type=int, default=2, help="parallel processes (default 2)")
+    dataset = sub.add_parser("dataset", help="episode datasets").add_subparsers(
+        dest="command", required=True
+    )
+    gen = dataset.add_parser(
+        "build", help="generate R2R-like episodes with people and instructions (HA-R2R schema)"
+    )
+    gen.add_argument(
+        "--scenes", nargs="+", required=True, help="scene ids: proc-<seed>, scan ids, folders"
+    )
+    gen.add_argument("--split", required=True, help="split name: writes HA_<split>.json")
+    gen.add_argument(
+        "--episodes-per-scene", type=int, default=20, help="paths per scene (default 20)"
+    )
+    gen.add_argument("--seed", type=int, default=0, help="seed; the simulator's people match it")
+    gen.add_argument("--out", type=Path, default=Path("."), help="output folder (default .)")
     args = parser.parse_args(argv)
-    if args.workers < 1:
+    if args.group == "dataset":
+        if args.episodes_per_scene < 1:
+            parser.error(f"--episodes-per-scene must be at least 1, got {args.episodes_per_scene}")
+    elif args.workers < 1:
         parser.error(f"--workers must be at least 1, got {args.workers}")
     try:
-        return scenes_build(args)
+        return dataset_build(args) if args.group == "dataset" else scenes_build(args)
     except HavlnError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

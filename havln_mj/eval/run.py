@@ -1,10 +1,10 @@
 """``python -m havln_mj.eval``: run an agent over a split and score it with the HA-VLN metrics.
 
-Episodes come from an R2R / HA-R2R file or split name (``--dataset``), or are drawn from
+Episodes come from an R2R / HA-R2R file or split name (``--dataset``), or are generated in
 procedural houses (``--scenes proc-0 proc-1 ...``: R2R-like shortest paths of 4–7 viewpoints
-and 5–20 m, without instructions). Every instruction is run through ``havln_mj.Simulator``
-(point body or GO1, rendering off, people placed by HA3D's rule or HA3D's placement file)
-with the chosen agent:
+and 5–20 m with three instructions each, people as the simulator places them for ``--seed``).
+Every instruction is run through ``havln_mj.Simulator`` (point body or GO1, rendering off,
+people placed by HA3D's rule or HA3D's placement file) with the chosen agent:
 
 * ``shortest``: the optimal expert (shortest path, people ignored);
 * ``oracle``: HA3D's sub-optimal human-aware expert (re-plans around people within 4.5 m);
@@ -23,7 +23,6 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
-import math
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -44,6 +43,7 @@ from havln_mj.tasks.experts import (
     run_expert,
 )
 from havln_mj.tasks.metrics import EvalEpisode, Evaluator, MetricConfig
+from havln_mj.tasks.procedural import scene_episodes
 
 AGENTS = ("shortest", "oracle", "oracle-global", "random")
 TABLE = (("NE", "ne"), ("TCR", "tcr"), ("CR", "cr"), ("SR", "sr"))
@@ -74,37 +74,16 @@ def make_agent(name: str) -> Callable[[np.random.Generator], Expert]:
         raise InvalidArgumentError(f"cannot load agent {name!r}: {exc}") from None
 
 
-def procedural_episodes(
-    scenes: Sequence[str], per_scene: int, rng: np.random.Generator
-) -> list[Episode]:
-    """R2R-like episodes in procedural houses: shortest paths of 4–7 viewpoints, 5–20 m."""
+def procedural_episodes(scenes: Sequence[str], per_scene: int, seed: int) -> list[Episode]:
+    """HA-R2R episodes generated in procedural houses (see :mod:`havln_mj.tasks.procedural`).
+
+    The people named in them are the ones the simulator places with the same seed.
+    """
     from havln_mj.scene.scan import load_scan
 
-    out = []
+    out: list[Episode] = []
     for s, scene in enumerate(scenes):
-        graph = load_scan(scene).graph
-        nodes = graph.nodes
-        pairs = [
-            (a, b)
-            for a in nodes
-            for b in nodes
-            if 5.0 <= graph.distance(a, b) <= 20.0 and 4 <= len(graph.shortest_path(a, b)) <= 7
-        ]
-        if not pairs:
-            raise InvalidArgumentError(f"scene {scene!r} has no 4–7 viewpoint paths of 5–20 m")
-        for k in rng.permutation(len(pairs))[:per_scene]:
-            a, b = pairs[int(k)]
-            path = tuple(graph.shortest_path(a, b))
-            out.append(
-                Episode(
-                    path_id=100_000 * (s + 1) + len(out),
-                    scan=scene,
-                    path=path,
-                    heading=float(rng.uniform(0.0, 2 * math.pi)),
-                    instructions=("",),
-                    distance=round(graph.distance(a, b), 2),
-                )
-            )
+        out += scene_episodes(load_scan(scene), per_scene, seed, first_path_id=10_000 * (s + 1))
     return out
 
 
@@ -196,10 +175,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         make_agent(args.agent)  # fail at once on a bad agent
         splits: list[tuple[str, list[Episode]]] = []
         if args.scenes:
-            rng = np.random.default_rng(args.seed)
-            splits.append(
-                (args.split or "procedural", procedural_episodes(args.scenes, args.per_scene, rng))
-            )
+            episodes = procedural_episodes(args.scenes, args.per_scene, args.seed)
+            splits.append((args.split or "procedural", episodes))
         else:
             for name in args.dataset:
                 data = load_dataset(

@@ -15,10 +15,10 @@ def test_procedural_split_tables_and_submission(tmp_path):
     args = "--scenes proc-0 proc-1 --per-scene 3 --agent shortest --seed 2"
     assert main([*args.split(), "--out", str(out)]) == 0
     (summary,) = json.loads((out / "summary.json").read_text())
-    assert summary["instructions"] == 6 and summary["split"] == "procedural"
+    assert summary["instructions"] == 18 and summary["split"] == "procedural"  # 3 per path
     assert summary["sr"] == 1.0 and summary["ne"] == 0.0 and summary["spl"] == pytest.approx(1.0)
     submission = json.loads((out / "submission.json").read_text())
-    assert len(submission) == 6 and all(s["trajectory"][0][0] for s in submission)
+    assert len(submission) == 18 and all(s["trajectory"][0][0] for s in submission)
     episodes = json.loads((out / "episodes.json").read_text())
     assert {e["instr_id"] for e in episodes} == {s["instr_id"] for s in submission}
     table = (out / "summary.md").read_text()
@@ -53,3 +53,4 @@ def test_the_go1_body_runs_the_same_split(tmp_path):
     assert main([*args.split(), "--out", str(out)]) == 0
     (summary,) = json.loads((out / "summary.json").read_text())
     assert summary["body"] == "go1" and summary["sr"] == 1.0 and summary["collisions"] == 0
+    assert summary["instructions"] == 3
