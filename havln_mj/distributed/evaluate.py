@@ -18,27 +18,17 @@ from __future__ import annotations
 
 import argparse
 import itertools
-import json
 import sys
 import time
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 
-from havln_mj.cache import atomic_write_bytes, atomic_write_json
 from havln_mj.distributed._ray import ensure_ray
 from havln_mj.errors import HavlnError
-from havln_mj.eval.run import (
-    _simulator,
-    make_agent,
-    markdown_table,
-    procedural_episodes,
-)
-from havln_mj.eval.run import (
-    parse_args as eval_parse_args,
-)
-from havln_mj.tasks.datasets import Episode, load_dataset
+from havln_mj.eval.run import _simulator, make_agent, run_cli
+from havln_mj.eval.run import parse_args as eval_parse_args
+from havln_mj.tasks.datasets import Episode
 from havln_mj.tasks.experts import run_expert
 from havln_mj.tasks.metrics import EvalEpisode, Evaluator, MetricConfig
 
@@ -179,36 +169,11 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the process exit code (writes what ``havln_mj.eval`` writes)."""
     args = parse_args(argv)
-    try:
-        make_agent(args.agent)
-        splits: list[tuple[str, list[Episode]]] = []
-        if args.scenes:
-            episodes = procedural_episodes(args.scenes, args.per_scene, args.seed)
-            splits.append((args.split or "procedural", episodes))
-        else:
-            for name in args.dataset:
-                data = load_dataset(
-                    name, connectivity_dir=args.connectivity_dir, data_dir=args.data_dir
-                )
-                splits.append((args.split or Path(str(name)).stem, list(data.episodes)))
-        out = args.out.expanduser().resolve()
-        out.mkdir(parents=True, exist_ok=True)
-        reports = [
-            evaluate_split_ray(args, eps, split, workers=args.workers, address=args.address)
-            for split, eps in splits
-        ]
-    except HavlnError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 2
-    summaries = [r["summary"] for r in reports]
-    atomic_write_json(out / "episodes.json", [e for r in reports for e in r["episodes"]])
-    atomic_write_json(out / "submission.json", [s for r in reports for s in r["submission"]])
-    atomic_write_json(out / "summary.json", summaries, indent=1)
-    table = markdown_table(summaries)
-    atomic_write_bytes(out / "summary.md", (table + "\n").encode())
-    print(table)
-    print(json.dumps(summaries, indent=1))
-    return 0
+
+    def sharded(a: argparse.Namespace, episodes: list[Episode], split: str) -> dict:
+        return evaluate_split_ray(a, episodes, split, workers=a.workers, address=a.address)
+
+    return run_cli(args, sharded)
 
 
 if __name__ == "__main__":

@@ -168,9 +168,17 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     return p.parse_args(argv)
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point; returns the process exit code."""
-    args = parse_args(argv)
+SplitRunner = Callable[[argparse.Namespace, list[Episode], str], dict]
+
+
+def run_cli(args: argparse.Namespace, evaluate: SplitRunner = evaluate_split) -> int:
+    """Loads the splits ``args`` names, evaluates each with ``evaluate`` and writes the files.
+
+    ``evaluate`` is :func:`evaluate_split` here; the Ray command passes its sharded version.
+
+    Returns:
+        The process exit code (2 on bad input, with the message on stderr).
+    """
     try:
         make_agent(args.agent)  # fail at once on a bad agent
         splits: list[tuple[str, list[Episode]]] = []
@@ -185,7 +193,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 splits.append((args.split or Path(str(name)).stem, list(data.episodes)))
         out = args.out.expanduser().resolve()
         out.mkdir(parents=True, exist_ok=True)
-        reports = [evaluate_split(args, episodes, split) for split, episodes in splits]
+        reports = [evaluate(args, episodes, split) for split, episodes in splits]
     except HavlnError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -198,3 +206,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(table)
     print(json.dumps(summaries, indent=1))
     return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point; returns the process exit code."""
+    return run_cli(parse_args(argv))

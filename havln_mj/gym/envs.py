@@ -42,6 +42,7 @@ inherits the parent's EGL state and hangs.
 
 from __future__ import annotations
 
+import abc
 import functools
 import math
 import numbers
@@ -95,7 +96,7 @@ def _positive_float(name: str, value: object) -> float:
     return float(value)
 
 
-class HAVLNEnv(gym.Env[dict[str, Any], np.int64]):
+class HAVLNEnv(gym.Env[dict[str, Any], np.int64], abc.ABC):
     """The shared machinery of the HA-VLN environments (use a subclass).
 
     Attributes:
@@ -271,8 +272,9 @@ class HAVLNEnv(gym.Env[dict[str, Any], np.int64]):
         d["collision"] = spaces.Discrete(2)
         return spaces.Dict(d)
 
+    @abc.abstractmethod
     def _action_space(self) -> spaces.Discrete:
-        raise NotImplementedError
+        """The env's discrete action space."""
 
     def _make_sim(self) -> Simulator:
         sim = Simulator(humans=self._humans, body=self.body)
@@ -410,9 +412,9 @@ class HAVLNEnv(gym.Env[dict[str, Any], np.int64]):
             raise InvalidActionError(f"action {action} out of range; valid 0–{n - 1}")
         return int(action)
 
+    @abc.abstractmethod
     def _act(self, action: int) -> tuple[bool, bool]:
         """Performs ``action``; returns (it was STOP, it was invalid and became a wait)."""
-        raise NotImplementedError
 
     def _goal_distance(self) -> float:
         return float(self._sim.getGeodesicDistance([self._current.episode.goal])[0])
