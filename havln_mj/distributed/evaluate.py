@@ -39,14 +39,14 @@ class ShardRunner:
     def __init__(self, args: argparse.Namespace) -> None:
         self._args = args
         self._sim = _simulator(args)
-        self._make = make_agent(args.agent)
+        self._make = make_agent(args.agent, args)
 
     def run(self, items: list[tuple[int, Episode, int]]) -> list[dict]:
         """Runs ``(index, episode, k)`` items; one EvalEpisode-ready record per item."""
         out = []
         for index, episode, k in items:
             rng = np.random.default_rng([self._args.seed, index])
-            trajectory = run_expert(self._sim, episode, self._make(rng))
+            trajectory = run_expert(self._sim, episode, self._make(rng), instruction=k)
             out.append(
                 {
                     "index": index,

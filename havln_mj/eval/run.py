@@ -11,7 +11,9 @@ people placed by HA3D's rule or HA3D's placement file) with the chosen agent:
 * ``oracle-global``: the paper's variant that plans once around every person;
 * ``random``: a seeded random walk of at most 30 steps;
 * ``module:callable``: your agent, a callable ``(rng) -> Expert`` (see
-  :class:`havln_mj.tasks.experts.Expert`).
+  :class:`havln_mj.tasks.experts.Expert`);
+* a checkpoint file (``.pt``) of a trained VLN-CM or VLN-DT (:mod:`havln_mj.agents.train`);
+  the features of scans it has not seen are rendered first, with the evaluation's people.
 
 Writes to ``--out``: ``episodes.json`` (per-instruction metrics), ``submission.json``
 (trajectories in the R2R submission format), ``summary.json`` and ``summary.md`` (NE, TCR,
@@ -49,12 +51,29 @@ AGENTS = ("shortest", "oracle", "oracle-global", "random")
 TABLE = (("NE", "ne"), ("TCR", "tcr"), ("CR", "cr"), ("SR", "sr"))
 
 
-def make_agent(name: str) -> Callable[[np.random.Generator], Expert]:
-    """The factory of an agent given by name or ``module:callable``.
+def make_agent(
+    name: str, args: argparse.Namespace | None = None
+) -> Callable[[np.random.Generator], Expert]:
+    """The factory of an agent given by name, ``module:callable`` or checkpoint file.
+
+    Args:
+        name: The agent.
+        args: The evaluation's arguments (a checkpoint agent renders features with its
+            seed, connectivity folder and placements).
 
     Raises:
         InvalidArgumentError: Unknown name, or a ``module:callable`` that cannot be imported.
+        MissingDataError: A checkpoint file that does not exist.
     """
+    if name.endswith(".pt"):
+        from havln_mj.agents.policy import load_agent  # torch: only for trained agents
+
+        return load_agent(
+            name,
+            seed=getattr(args, "seed", 0),
+            connectivity_dir=getattr(args, "connectivity_dir", None),
+            human_placements=getattr(args, "human_placements", None),
+        )
     builtin = {
         "shortest": lambda rng: ShortestPathExpert("graph"),
         "oracle": lambda rng: HumanAwareExpert(mode="local"),
@@ -66,7 +85,8 @@ def make_agent(name: str) -> Callable[[np.random.Generator], Expert]:
     module, _, attr = name.partition(":")
     if not attr:
         raise InvalidArgumentError(
-            f"unknown agent {name!r}; valid: {', '.join(AGENTS)} or 'module:callable'"
+            f"unknown agent {name!r}; valid: {', '.join(AGENTS)}, 'module:callable' or a "
+            "checkpoint file (.pt)"
         )
     try:
         return getattr(importlib.import_module(module), attr)
@@ -74,16 +94,20 @@ def make_agent(name: str) -> Callable[[np.random.Generator], Expert]:
         raise InvalidArgumentError(f"cannot load agent {name!r}: {exc}") from None
 
 
-def procedural_episodes(scenes: Sequence[str], per_scene: int, seed: int) -> list[Episode]:
+def procedural_episodes(
+    scenes: Sequence[str], per_scene: int, seed: int, skip: int = 0
+) -> list[Episode]:
     """HA-R2R episodes generated in procedural houses (see :mod:`havln_mj.tasks.procedural`).
 
-    The people named in them are the ones the simulator places with the same seed.
+    The people named in them are the ones the simulator places with the same seed. ``skip``
+    leaves out each scene's first paths (another split's: val_seen after train).
     """
     from havln_mj.scene.scan import load_scan
 
     out: list[Episode] = []
     for s, scene in enumerate(scenes):
-        out += scene_episodes(load_scan(scene), per_scene, seed, first_path_id=10_000 * (s + 1))
+        first = 10_000 * (s + 1)
+        out += scene_episodes(load_scan(scene), per_scene, seed, first_path_id=first, skip=skip)
     return out
 
 
@@ -103,7 +127,7 @@ def _simulator(args: argparse.Namespace) -> Simulator:
 def evaluate_split(args: argparse.Namespace, episodes: list[Episode], split: str) -> dict:
     """Runs the agent over every instruction of ``episodes``; returns the split's report."""
     sim = _simulator(args)
-    make = make_agent(args.agent)
+    make = make_agent(args.agent, args)
     rng = np.random.default_rng(args.seed)
     config = MetricConfig(critical=args.critical)
     evaluator = Evaluator(config=config)
@@ -111,7 +135,7 @@ def evaluate_split(args: argparse.Namespace, episodes: list[Episode], split: str
     t0 = time.perf_counter()
     for episode in tqdm(episodes, desc=split, unit="path"):
         for k in range(len(episode.instructions)):
-            trajectory = run_expert(sim, episode, make(rng))
+            trajectory = run_expert(sim, episode, make(rng), instruction=k)
             instr_id = f"{episode.path_id}_{k}"
             submission.append({"instr_id": instr_id, "trajectory": trajectory.r2r()})
             steps = [
@@ -156,7 +180,14 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     src.add_argument("--scenes", nargs="+", help="procedural scene ids (proc-<seed>)")
     p.add_argument("--split", default=None, help="name of the split in the tables")
     p.add_argument("--per-scene", type=int, default=10, help="episodes per procedural scene")
-    p.add_argument("--agent", default="shortest", help=f"{', '.join(AGENTS)} or module:callable")
+    p.add_argument(
+        "--skip", type=int, default=0, help="leave out each scene's first paths (val_seen)"
+    )
+    p.add_argument(
+        "--agent",
+        default="shortest",
+        help=f"{', '.join(AGENTS)}, module:callable or a trained agent's checkpoint (.pt)",
+    )
     p.add_argument("--body", choices=("point", "go1"), default="point")
     p.add_argument("--critical", choices=("paper", "ha3d", "none"), default="paper")
     p.add_argument("--seed", type=int, default=0)
@@ -180,10 +211,10 @@ def run_cli(args: argparse.Namespace, evaluate: SplitRunner = evaluate_split) ->
         The process exit code (2 on bad input, with the message on stderr).
     """
     try:
-        make_agent(args.agent)  # fail at once on a bad agent
+        make_agent(args.agent, args)  # fail at once on a bad agent
         splits: list[tuple[str, list[Episode]]] = []
         if args.scenes:
-            episodes = procedural_episodes(args.scenes, args.per_scene, args.seed)
+            episodes = procedural_episodes(args.scenes, args.per_scene, args.seed, args.skip)
             splits.append((args.split or "procedural", episodes))
         else:
             for name in args.dataset:

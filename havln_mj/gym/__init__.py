@@ -24,7 +24,7 @@ except ImportError as exc:  # pragma: no cover - depends on the installation
 
 from havln_mj.gym.envs import EgoEnv, Go1Env, GraphEnv, HAVLNEnv
 from havln_mj.gym.registration import ENV_IDS, register_envs
-from havln_mj.gym.vocab import Vocabulary
+from havln_mj.tasks.vocab import Vocabulary
 
 register_envs()
 

@@ -55,7 +55,7 @@ import numpy as np
 from gymnasium import spaces
 
 from havln_mj.errors import InvalidActionError, InvalidArgumentError, NotInitializedError
-from havln_mj.gym.vocab import Vocabulary
+from havln_mj.tasks.vocab import Vocabulary
 from havln_mj.sim.egocentric import EgoAction
 from havln_mj.sim.simulator import ROBOT_ACTIONS, Simulator
 from havln_mj.sim.state import SimState

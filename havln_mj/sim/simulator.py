@@ -511,6 +511,11 @@ class Simulator:
         return cfg.vfov * cfg.width / cfg.height / 2.0
 
     @property
+    def batch_size(self) -> int:
+        """The number of batch elements (``setBatchSize``)."""
+        return self._cfg.batch_size
+
+    @property
     def half_hfov(self) -> float:
         """Half the horizontal field of view (radians), as MatterSim approximates it.
 
@@ -572,6 +577,31 @@ class Simulator:
         self._apply(actions)
         self._timers["process"] += time.perf_counter() - t0
 
+    def wait(self, seconds: Sequence[float]) -> None:
+        """Each element stays where it is, looking where it looks, for ``seconds`` (≥ 0).
+
+        An extension of MatterSim (HA3D's frame counter, made explicit): people go on moving,
+        the collision signal covers the whole wait, and the state (images included) is that
+        at the end. ``makeAction`` with index 0 and no turn is the same with :data:`WAIT_S`.
+
+        Raises:
+            NotInitializedError: No episode has been started.
+            BatchSizeError: ``seconds`` does not have one entry per batch element.
+            InvalidArgumentError: A duration is negative or not finite.
+        """
+        t0 = time.perf_counter()
+        self._running()
+        durations = []
+        for i, s in enumerate(self._batch("seconds", seconds)):
+            ok = isinstance(s, numbers.Real) and not isinstance(s, bool) and math.isfinite(s)
+            if not ok or s < 0:
+                raise InvalidArgumentError(
+                    f"wait for batch element {i} must be a finite number of seconds ≥ 0, got {s!r}"
+                )
+            durations.append(float(s))
+        self._apply([(i, 0, 0.0, 0.0) for i in range(len(durations))], durations)
+        self._timers["process"] += time.perf_counter() - t0
+
     def _running(self) -> list[_Agent]:
         if not self._initialized:
             raise NotInitializedError("makeAction called before initialize()")
@@ -598,12 +628,18 @@ class Simulator:
         except InvalidArgumentError as exc:
             raise InvalidActionError(str(exc)) from None
 
-    def _apply(self, actions: list[tuple[int, int, float, float]]) -> None:
-        """Move, then rotate, then recompute candidates, for each (element, index, dh, de)."""
+    def _apply(
+        self, actions: list[tuple[int, int, float, float]], waits: Sequence[float] | None = None
+    ) -> None:
+        """Move, then rotate, then recompute candidates, for each (element, index, dh, de).
+
+        ``waits`` (one per action, for index 0 without turns) overrides :data:`WAIT_S`.
+        """
         cfg = self._cfg
         cos_half = self._cos_half_hfov()
         changed, near = [], []
-        for i, k, dh, de in actions:
+        for n, (i, k, dh, de) in enumerate(actions):
+            wait_s = WAIT_S if waits is None else waits[n]
             a = self._agents[i]
             here, target = a.navigable[0], a.navigable[k]
             if cfg.discretized:
@@ -615,7 +651,7 @@ class Simulator:
                     a.heading + dh, a.elevation + de, cfg.elevation_limits
                 )
             if a.legged is not None:
-                outcome = self._legged_move(a, k, target, heading)
+                outcome = self._legged_move(a, k, target, heading, wait_s)
                 heading, elevation, view = self._view(a.legged.heading(), elevation)
                 duration = outcome.duration
                 contact = outcome.contact or NO_PROXIMITY
@@ -625,7 +661,7 @@ class Simulator:
                 turn = max(abs(wrap_angle(heading - a.heading)), abs(elevation - a.elevation))
                 duration = move_s + turn / self._turn_rate
                 if duration == 0.0:
-                    duration = WAIT_S
+                    duration = wait_s
                 contact = NO_PROXIMITY
                 if len(a.crowd):
                     start, end = (here.x, here.y, here.z), (target.x, target.y, target.z)
@@ -640,13 +676,15 @@ class Simulator:
             near.append(contact)
         self._publish(changed, near)
 
-    def _legged_move(self, a: _Agent, k: int, target: ViewPoint, heading: float) -> Outcome:
+    def _legged_move(
+        self, a: _Agent, k: int, target: ViewPoint, heading: float, wait_s: float
+    ) -> Outcome:
         """A graph action with the GO1: walk to the target viewpoint, then face ``heading``."""
         legged = a.legged
         if k == 0:
             turn = wrap_angle(heading - legged.heading())
             if abs(turn) < 1e-9:
-                return legged.run([("stand", WAIT_S)], a.time)
+                return legged.run([("stand", wait_s)], a.time)
             return legged.run([("turn", turn)], a.time)
         floor = a.table.graph.floor_z(target.viewpointId)
         return legged.go_to(np.array([target.x, target.y, floor]), heading, a.time)

@@ -60,12 +60,19 @@ class ExpertContext:
         episode: The episode.
         graph: The scan's navigation graph (the simulator's own).
         step: Number of actions taken so far.
+        instruction: Which of the episode's instructions is being followed.
     """
 
     sim: object
     episode: Episode
     graph: NavGraph
     step: int = 0
+    instruction: int = 0
+
+    @property
+    def instruction_text(self) -> str:
+        """The instruction being followed."""
+        return self.episode.instructions[self.instruction]
 
     @property
     def goal(self) -> str:
@@ -241,18 +248,25 @@ TURN_COST = 1e-3  # metres an egocentric turn "costs": fewest turns among shorte
 
 
 def ego_plan(
-    graph: NavGraph, start: str, heading: float, goal: str, half_hfov: float
+    graph: NavGraph,
+    start: str,
+    heading: float,
+    goal: str,
+    half_hfov: float,
+    blocked: Iterable[str] = (),
 ) -> list[EgoAction] | None:
     """The shortest egocentric action sequence from ``start`` at ``heading`` to ``goal``.
 
     Searches (viewpoint, heading) states, headings 30° apart from ``heading``, with the
     simulator's FORWARD rule (:func:`forward_target`, camera level): the route is shortest in
     metres, then in turns. FORWARD cannot reach every neighbour (another one may always be
-    nearer the view centre), so this can differ from the graph's shortest path.
+    nearer the view centre), so this can differ from the graph's shortest path. FORWARD never
+    enters a ``blocked`` viewpoint (``start`` and ``goal`` are never blocked).
 
     Returns:
         The actions, ending with STOP; None when FORWARD and turns cannot reach ``goal``.
     """
+    blocked = set(blocked) - {start, goal}
     n = round(2 * math.pi / TURN)
     order = {v: i for i, v in enumerate(graph.nodes)}
     begin = (start, 0)
@@ -273,7 +287,7 @@ def ego_plan(
         moves = [((vp, (k + 1) % n), EgoAction.TURN_RIGHT, TURN_COST)]
         moves.append(((vp, (k - 1) % n), EgoAction.TURN_LEFT, TURN_COST))
         ahead = forward_target(graph, vp, heading + k * TURN, 0.0, half_hfov)
-        if ahead is not None:
+        if ahead is not None and ahead not in blocked:
             length = math.dist(graph.position(vp), graph.position(ahead))
             moves.append(((ahead, k), EgoAction.FORWARD, length))
         for nxt, action, cost in moves:
@@ -370,24 +384,35 @@ class ShortestPathExpert:
 class HumanAwareExpert:
     """HA3D's sub-optimal expert: avoids the nodes near people, waits when boxed in.
 
+    With egocentric actions (``action_space="ego"``, the teacher of the egocentric agents)
+    it follows :func:`ego_plan` with FORWARD kept out of the avoided nodes. The egocentric set
+    has no wait, and HA3D's "no path" answer is the STOP tuple, which would teach an agent to
+    stop beside people; so when no route avoids them it takes the shortest egocentric route
+    regardless, counting the step in ``waits``.
+
     Args:
         mode: ``"local"`` re-plans each step around the people within ``sight_radius`` of
             the agent; ``"global"`` plans once around everyone (re-planning only while no
             path exists).
+        action_space: ``"graph"`` (``makeAction`` tuples) or ``"ego"`` (``EgoAction``).
         sight_radius: How near the agent a person must be to matter (local mode).
         clearance: Nodes this close to such a person are removed (start and goal kept).
         weighted: Shortest by length (True) or by number of edges (HA3D).
         max_steps: Default cap on actions.
 
     Attributes:
-        last_plan: The path planned at the last step (None when blocked).
-        waits: How many times the expert waited in the current episode.
+        last_plan: The path planned at the last step (None when blocked; graph actions).
+        waits: How many times the expert waited in the current episode (ego: went on
+            without a route around people).
     """
+
+    _MEMO_SIZE = 200_000  # egocentric first actions kept; a training run revisits states
 
     def __init__(
         self,
         mode: str = "local",
         *,
+        action_space: str = "graph",
         sight_radius: float = SIGHT_RADIUS,
         clearance: float = CLEARANCE,
         weighted: bool = True,
@@ -395,11 +420,16 @@ class HumanAwareExpert:
     ) -> None:
         if mode not in ("local", "global"):
             raise InvalidArgumentError(f"mode {mode!r} unknown; valid: 'local', 'global'")
+        if action_space not in ("graph", "ego"):
+            raise InvalidArgumentError(
+                f"action_space {action_space!r} unknown; valid: 'graph', 'ego'"
+            )
         for name, value in (("sight_radius", sight_radius), ("clearance", clearance)):
             if not (isinstance(value, int | float) and value >= 0 and math.isfinite(value)):
                 raise InvalidArgumentError(f"{name} must be a finite number ≥ 0, got {value!r}")
         self.mode = mode
-        self.name = f"human_aware_{mode}"
+        self.action_space = action_space
+        self.name = f"human_aware_{mode}" + ("_ego" if action_space == "ego" else "")
         self.sight_radius = float(sight_radius)
         self.clearance = float(clearance)
         self.weighted = weighted
@@ -407,6 +437,9 @@ class HumanAwareExpert:
         self.last_plan: list[str] | None = None
         self.waits = 0
         self._route: list[str] | None = None
+        self._avoid: frozenset[str] = frozenset()  # global mode, egocentric actions
+        self._hfov = DEFAULT_HALF_HFOV
+        self._memo: dict[tuple, tuple[EgoAction, bool]] = {}
 
     @staticmethod
     def _people(ctx: ExpertContext) -> np.ndarray:
@@ -420,10 +453,46 @@ class HumanAwareExpert:
     def reset(self, ctx: ExpertContext) -> None:
         """Plans G' once (global mode)."""
         self.last_plan, self.waits = None, 0
+        self._hfov = _sim_half_hfov(ctx.sim)
+        if self.action_space == "ego":
+            keep = (ctx.episode.start, ctx.goal)
+            people = self._people(ctx) if self.mode == "global" else ()
+            self._avoid = frozenset(blocked_nodes(ctx.graph, people, self.clearance, keep))
+            return
         self._route = self._global_route(ctx, ctx.episode.start) if self.mode == "global" else None
+
+    def _ego(self, ctx: ExpertContext, state: SimState) -> EgoAction:
+        if state.elevation > TURN / 2:
+            return EgoAction.LOOK_DOWN
+        if state.elevation < -TURN / 2:
+            return EgoAction.LOOK_UP
+        here, goal, graph = state.location.viewpointId, ctx.goal, ctx.graph
+        if here == goal:
+            return STOP
+        if self.mode == "local":
+            near = people_near(graph, here, self._people(ctx), self.sight_radius)
+            avoid = frozenset(blocked_nodes(graph, near, self.clearance, (here, goal)))
+        else:
+            avoid = self._avoid - {here}
+        step = round(wrap_angle(state.heading) / TURN) % round(2 * math.pi / TURN)
+        key = (ctx.episode.scan, here, step, goal, avoid, self._hfov)
+        memo = self._memo.get(key)
+        if memo is None:
+            plan = ego_plan(graph, here, state.heading, goal, self._hfov, avoid)
+            boxed_in = plan is None
+            if boxed_in:
+                plan = ego_plan(graph, here, state.heading, goal, self._hfov)
+            memo = (STOP if plan is None else plan[0], boxed_in)
+            if len(self._memo) >= self._MEMO_SIZE:
+                self._memo.clear()
+            self._memo[key] = memo
+        self.waits += memo[1]
+        return memo[0]
 
     def act(self, ctx: ExpertContext, state: SimState) -> Action:
         """The next action: teacher towards the planned next node, WAIT when blocked."""
+        if self.action_space == "ego":
+            return self._ego(ctx, state)
         here, goal, graph = state.location.viewpointId, ctx.goal, ctx.graph
         if here == goal:
             return STOP
@@ -621,6 +690,7 @@ def run_expert(
     graph: NavGraph | None = None,
     reward: str | RewardFn = "paper",
     max_steps: int | None = None,
+    instruction: int = 0,
 ) -> Trajectory:
     """Runs ``expert`` through ``episode`` on ``sim`` (batch size 1).
 
@@ -634,6 +704,8 @@ def run_expert(
         graph: The scan's graph (default: the simulator's).
         reward: A reward name of :data:`havln_mj.tasks.rewards.REWARDS` or a function.
         max_steps: Cap on actions (default: the expert's ``max_steps``).
+        instruction: Which of the episode's instructions the expert follows (agents that
+            read it find it in :attr:`ExpertContext.instruction_text`).
 
     Returns:
         The trajectory, with per-step rewards.
@@ -642,7 +714,8 @@ def run_expert(
     cap = _positive("max_steps", expert.max_steps if max_steps is None else max_steps)
     sim.newEpisode([episode.scan], [episode.start], [episode.heading], [0.0])
     graph = graph or _sim_graph(sim, episode.scan)
-    ctx = ExpertContext(sim, episode, graph)
+    episode.instruction(instruction)  # raises for an index the episode does not have
+    ctx = ExpertContext(sim, episode, graph, instruction=instruction)
     state = sim.getState()[0]
     dist = graph.distance(state.location.viewpointId, episode.goal)
     records = [_record(state, None, dist, {})]

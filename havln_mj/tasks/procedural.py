@@ -99,8 +99,13 @@ def scene_episodes(
     seed: int,
     first_path_id: int = 0,
     catalog: Catalog | None = None,
+    skip: int = 0,
 ) -> list[Episode]:
     """Up to ``n`` HA-R2R episodes in one scan.
+
+    Episode ``k`` depends only on the scan, the seed and ``k``, so ``skip`` gives a split of
+    other paths in the same houses with the same people (e.g. val_seen after train's first
+    ``skip``).
 
     Args:
         scan: The building.
@@ -108,23 +113,29 @@ def scene_episodes(
         seed: The dataset seed; the people are the simulator's for this seed.
         first_path_id: ``path_id`` of the first episode; the others follow.
         catalog: The activity catalog (default: the built-in one).
+        skip: Leave out the scan's first ``skip`` episodes (they belong to another split).
 
     Raises:
-        InvalidArgumentError: ``n`` is below 1, or the scan has no R2R-like path.
+        InvalidArgumentError: ``n`` is below 1, ``skip`` below 0, or the scan has no
+            R2R-like path.
     """
     if n < 1:
         raise InvalidArgumentError(f"episodes per scene must be at least 1, got {n}")
+    if skip < 0:
+        raise InvalidArgumentError(f"episodes to skip must be at least 0, got {skip}")
     catalog = catalog or load_catalog()
     crowd = scene_crowd(scan, seed, catalog)
     rng = scene_rng(seed, scan.scene_id, 1)  # paths and wording: a stream apart from people
     out = []
-    for k, path in enumerate(sample_paths(scan.graph, n, rng)):
+    for k, path in enumerate(sample_paths(scan.graph, n + skip, rng)):
         heading = float(rng.uniform(0.0, 2 * math.pi))
         route = describe_route(scan, path, heading, crowd, catalog)
         instructions, about_people = generate_instructions(route, rng, INSTRUCTIONS_PER_PATH)
+        if k < skip:
+            continue
         out.append(
             Episode(
-                path_id=first_path_id + k,
+                path_id=first_path_id + k - skip,
                 scan=scan.scene_id,
                 path=path,
                 heading=round(heading, 6),

@@ -1,4 +1,4 @@
-"""The instruction vocabulary of the gymnasium environments: tokens ↔ fixed-length id arrays.
+"""The instruction vocabulary of the environments and agents: tokens ↔ fixed-length id arrays.
 
 Tokens are :func:`havln_mj.tasks.instructions.tokenize` units. Id 0 is padding (``<pad>``), id
 1 stands for any token not in the vocabulary (``<unk>``); the other tokens follow, most

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from havln_mj.errors import InvalidArgumentError, MissingDataError
-from havln_mj.gym.vocab import PAD, UNK, Vocabulary
+from havln_mj.tasks.vocab import PAD, UNK, Vocabulary
 
 
 def test_from_texts_orders_by_frequency_then_alphabetically():

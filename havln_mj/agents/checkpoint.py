@@ -1,0 +1,121 @@
+"""Agent checkpoints: one file with everything needed to run, evaluate or resume an agent.
+
+A checkpoint holds the agent kind (``vln_cm`` / ``vln_dt``), the model's configuration and
+weights, the instruction vocabulary, the view encoder (configuration and weights) with the
+feature settings, and for resuming the training configuration, iteration, optimiser state,
+generator states and loss history. Files are written atomically.
+"""
+
+from __future__ import annotations
+
+import io
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import torch
+from torch import nn
+
+from havln_mj.agents.featurize import FeatureSpec
+from havln_mj.agents.vision import ViewEncoder
+from havln_mj.cache import atomic_write_bytes
+from havln_mj.errors import MalformedDataError, MissingDataError
+from havln_mj.tasks.vocab import Vocabulary
+
+FORMAT = "havln_mj-agent-1"
+AGENTS = ("vln_cm", "vln_dt")
+
+
+def build_model(agent: str, config: dict) -> nn.Module:
+    """A fresh network of ``agent`` from its configuration dict.
+
+    Raises:
+        MalformedDataError: Unknown agent kind.
+    """
+    if agent == "vln_cm":
+        from havln_mj.agents.vln_cm import VLNCM, CMConfig
+
+        return VLNCM(CMConfig(**config))
+    if agent == "vln_dt":
+        from havln_mj.agents.vln_dt import DecisionTransformer, DTConfig
+
+        return DecisionTransformer(DTConfig(**config))
+    raise MalformedDataError(f"unknown agent kind {agent!r}; valid: {', '.join(AGENTS)}")
+
+
+@dataclass
+class AgentBundle:
+    """A trained (or training) agent and what it observes with.
+
+    Attributes:
+        agent: ``"vln_cm"`` or ``"vln_dt"``.
+        model: The network.
+        model_config: Its configuration (``CMConfig`` / ``DTConfig`` fields).
+        vocab: The instruction vocabulary.
+        encoder: The view encoder its features come from.
+        features: How the features are rendered.
+        state: Training state for resuming (iteration, optimiser, generators, history, config).
+    """
+
+    agent: str
+    model: nn.Module
+    model_config: dict
+    vocab: Vocabulary
+    encoder: ViewEncoder
+    features: FeatureSpec
+    state: dict[str, Any] = field(default_factory=dict)
+
+    def save(self, path: str | Path) -> None:
+        """Writes the checkpoint atomically."""
+        spec = asdict(self.features)
+        blob = {
+            "format": FORMAT,
+            "agent": self.agent,
+            "model_config": self.model_config,
+            "state_dict": self.model.state_dict(),
+            "vocab": list(self.vocab.tokens),
+            "encoder": {"config": self.encoder.config(), "state_dict": self.encoder.state_dict()},
+            "features": spec,
+            "state": self.state,
+        }
+        buf = io.BytesIO()
+        torch.save(blob, buf)
+        atomic_write_bytes(Path(path), buf.getvalue())
+
+    @classmethod
+    def load(cls, path: str | Path) -> AgentBundle:
+        """Reads a checkpoint.
+
+        Raises:
+            MissingDataError: No such file.
+            MalformedDataError: Not an agent checkpoint, or a damaged one.
+        """
+        path = Path(path).expanduser()
+        if not path.is_file():
+            raise MissingDataError(
+                f"agent checkpoint {path} does not exist; train one with "
+                "`python -m havln_mj.agents.train --agent vln_cm --config ...`"
+            )
+        try:
+            blob = torch.load(path, map_location="cpu", weights_only=False)
+        except (RuntimeError, EOFError, OSError, ValueError) as exc:
+            raise MalformedDataError(f"{path} cannot be read as a checkpoint: {exc}") from None
+        if not isinstance(blob, dict) or blob.get("format") != FORMAT:
+            raise MalformedDataError(f"{path} is not a havln_mj agent checkpoint ({FORMAT})")
+        try:
+            model = build_model(blob["agent"], blob["model_config"])
+            model.load_state_dict(blob["state_dict"])
+            encoder = ViewEncoder.from_config(blob["encoder"]["config"])
+            encoder.load_state_dict(blob["encoder"]["state_dict"])
+            features = FeatureSpec.from_dict(blob["features"])
+        except (KeyError, TypeError, RuntimeError) as exc:
+            raise MalformedDataError(f"checkpoint {path} is damaged: {exc}") from None
+        return cls(
+            blob["agent"],
+            model.eval(),
+            blob["model_config"],
+            Vocabulary(blob["vocab"]),
+            encoder.eval(),
+            features,
+            blob.get("state") or {},
+        )
