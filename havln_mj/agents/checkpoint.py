@@ -9,6 +9,7 @@ generator states and loss history. Files are written atomically.
 from __future__ import annotations
 
 import io
+import pickle
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -98,7 +99,7 @@ class AgentBundle:
             )
         try:
             blob = torch.load(path, map_location="cpu", weights_only=False)
-        except (RuntimeError, EOFError, OSError, ValueError) as exc:
+        except (RuntimeError, EOFError, OSError, ValueError, pickle.UnpicklingError) as exc:
             raise MalformedDataError(f"{path} cannot be read as a checkpoint: {exc}") from None
         if not isinstance(blob, dict) or blob.get("format") != FORMAT:
             raise MalformedDataError(f"{path} is not a havln_mj agent checkpoint ({FORMAT})")

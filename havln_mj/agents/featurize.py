@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import io
+import pickle
 import sys
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
@@ -103,7 +104,7 @@ def load_encoder(path: str | Path) -> ViewEncoder:
         blob = torch.load(path, map_location="cpu", weights_only=False)
         encoder = ViewEncoder.from_config(blob["config"])
         encoder.load_state_dict(blob["state_dict"])
-    except (KeyError, TypeError, RuntimeError, EOFError) as exc:
+    except (KeyError, TypeError, RuntimeError, EOFError, pickle.UnpicklingError) as exc:
         raise MalformedDataError(f"{path} is not a view encoder file: {exc}") from None
     return encoder.eval()
 
@@ -142,6 +143,9 @@ def pretrain(
         pick = rng.permutation(len(vps))[: spec.pretrain_viewpoints]
         views += list(renderer.render(scene, [vps[i] for i in sorted(pick)]))
     rgb, depth, person, forward, region = _flatten(views, spec.view)
+    # Validation rows come from viewpoints the encoder never trained on.
+    per_vp = views[0].rgb.shape[0] * spec.view.slots
+    groups = np.repeat(np.arange(len(views)), per_vp)
     targets = {"region": region, "person": person, "forward": forward}
     if depth is not None:
         targets["depth"] = _depth_cells(depth)
@@ -156,6 +160,7 @@ def pretrain(
         epochs=spec.pretrain_epochs,
         seed=spec.seed,
         progress=progress,
+        groups=groups,
     )
     return encoder.eval(), history
 

@@ -592,7 +592,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--out", type=Path, default=None, help="output folder (default runs/<agent>)")
     p.add_argument("--resume", action="store_true", help="continue from OUT/checkpoint.pt")
     p.add_argument("--no-progress", action="store_true")
+    p.add_argument(
+        "--threads",
+        type=int,
+        default=None,
+        help="torch threads (default: torch's; 1 on a busy machine)",
+    )
     args = p.parse_args(argv)
+    if args.threads is not None:
+        torch.set_num_threads(max(1, args.threads))
     try:
         cfg = read_config(args.config, args.agent, args.overrides)
         out = (args.out or Path("runs") / cfg.agent).expanduser().resolve()

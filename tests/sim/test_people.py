@@ -132,3 +132,29 @@ def test_real_scans_get_ha3d_people(shared_data):
     sim.newRandomEpisode(["17DRP5sb8fy"])
     people = sim.getHumanState()[0]
     assert sorted(p.region for p in people) == ["f", "v"]  # family room and tv room, as HA3D
+
+
+def test_wait_lets_people_move_and_checks_collisions_throughout():
+    sim = _sim(seed=3)
+    sim.setBatchSize(2)
+    sim.newRandomEpisode([SCAN, SCAN])
+    before = [s.location.viewpointId for s in sim.getState()]
+    people0 = np.array([p.position for p in sim.getHumanState()[0]])
+    sim.wait([4.0, 0.0])
+    a, b = sim.getState()
+    assert [a.location.viewpointId, b.location.viewpointId] == before
+    assert (a.time, b.time, a.step) == (4.0, 0.0, 1)
+    people4 = np.array([p.position for p in sim.getHumanState()[0]])
+    assert np.abs(people4 - people0).max() > 0.01  # people went on moving
+    # One wait of 3 s equals three makeAction waits of 1 s, collisions included.
+    one, three = _sim(seed=3), _sim(seed=3)
+    for s in (one, three):
+        s.newRandomEpisode([SCAN])
+    one.wait([3.0])
+    for _ in range(3):
+        three.makeAction([0], [0.0], [0.0])
+    assert one.getState()[0].time == three.getState()[0].time == 3.0
+    with pytest.raises(ValueError, match="finite number of seconds"):
+        one.wait([-1.0])
+    with pytest.raises(IndexError, match="batch size"):
+        one.wait([1.0, 1.0])

@@ -166,6 +166,37 @@ def test_waits_when_boxed_in(graph):
         assert times == sorted(times) and times[-1] > 0  # waiting takes time; people move on
 
 
+def test_egocentric_human_aware_expert_walks_around_a_person(graph):
+    a, c, m, person = _detour_case(graph)
+    sim = _sim(humans=_standing_at([person]))
+    ep = _episode(graph, a, c)
+    for mode in ("local", "global"):
+        expert = HumanAwareExpert(mode, action_space="ego")
+        tr = run_expert(sim, ep, expert)
+        assert tr.stopped and tr.final_viewpoint == c, mode
+        assert all(isinstance(r.action, EgoAction) for r in tr.steps)
+        assert m not in tr.path and expert.waits == 0, mode
+
+
+def test_egocentric_expert_goes_on_when_no_route_avoids_people(graph):
+    # Boxed in (people on every neighbour): the ego set has no wait, so it takes the
+    # shortest route anyway instead of stopping beside them, and counts those steps.
+    start = next(
+        v
+        for v in graph.nodes
+        if graph.neighbors(v)
+        and all(
+            np.hypot(*(graph.position(v) - graph.position(n))[:2]) < 4.0 for n in graph.neighbors(v)
+        )
+    )
+    goal = max(graph.nodes, key=lambda v: graph.distance(start, v))
+    sim = _sim(humans=_standing_at([_floor_point(graph, n) for n in graph.neighbors(start)]))
+    expert = HumanAwareExpert("local", action_space="ego")
+    tr = run_expert(sim, _episode(graph, start, goal), expert)
+    assert tr.stopped and tr.final_viewpoint == goal
+    assert expert.waits > 0 and tr.collisions > 0
+
+
 # ---------------------------------------------------------------------- random walk and rewards
 
 
@@ -273,6 +304,8 @@ def test_bad_expert_arguments():
         ShortestPathExpert("panoramic")
     with pytest.raises(ValueError, match="'local', 'global'"):
         HumanAwareExpert("everywhere")
+    with pytest.raises(ValueError, match="action_space 'panoramic'"):
+        HumanAwareExpert("local", action_space="panoramic")
     with pytest.raises(ValueError, match="Generator"):
         RandomWalkExpert(3)
     with pytest.raises(ValueError, match="summing to 1"):

@@ -1,0 +1,116 @@
+"""The training command end to end on tiny settings: files, determinism, resume, evaluation."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from havln_mj.agents.checkpoint import AgentBundle  # noqa: E402
+from havln_mj.agents.train import Trainer, main, read_config  # noqa: E402
+from havln_mj.errors import InvalidArgumentError, MissingDataError  # noqa: E402
+from havln_mj.eval.run import main as eval_main  # noqa: E402
+
+TINY = {
+    "train": {"scenes": ["proc-3:5"], "per_scene": 3},
+    "val": {"scenes": ["proc-3:5"], "per_scene": 1, "skip": 3},
+    "features": {
+        "view": {"width": 32, "height": 24, "slots": 2},
+        "encoder": {"widths": [8, 16], "blocks": [1, 1], "out_dim": 16},
+        "pretrain_scenes": 2,
+        "pretrain_viewpoints": 3,
+        "pretrain_epochs": 1,
+    },
+    "iterations": 4,
+    "batch_size": 4,
+    "rollout_batch": 4,
+    "eval_every": 2,
+    "log_every": 2,
+    "random_walks": 30,
+    "max_steps": 20,
+}
+CM = {**TINY, "agent": "vln_cm", "model": {"word_dim": 8, "hidden": 16, "action_dim": 4},
+      "feedback": "mixed", "random_fraction": 0.5}  # fmt: skip
+
+
+DT = {**TINY, "agent": "vln_dt", "batch_size": 8,
+      "model": {"d_model": 16, "n_layers": 1, "n_heads": 2, "context": 4,
+                "text": {"d_model": 16, "n_layers": 1, "n_heads": 2, "max_len": 80}}}  # fmt: skip
+
+
+def _config(tmp_path, d, name="c.json"):
+    path = tmp_path / name
+    path.write_text(json.dumps(d))
+    return path
+
+
+def _weights(path):
+    return [t.clone() for t in AgentBundle.load(path).model.state_dict().values()]
+
+
+def test_vln_cm_trains_writes_its_files_and_is_evaluated(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["--config", str(_config(tmp_path, CM)), "--out", str(out), "--no-progress"]) == 0
+    for name in ("checkpoint.pt", "best.pt", "train.log", "history.json", "loss.png"):
+        assert (out / name).is_file(), name
+    history = json.loads((out / "history.json").read_text())
+    assert [h["iteration"] for h in history] == [2, 4]
+    assert all(np.isfinite(h["loss"]) and 0 <= h["val_sr"] <= 1 for h in history)
+    log = (out / "train.log").read_text()
+    assert "expert demos" in log and "random-walk demos" in log
+    capsys.readouterr()
+    # The evaluation harness runs the checkpoint (features of unseen proc-5 are rendered).
+    ev = tmp_path / "eval"
+    code = eval_main(["--scenes", "proc-5", "--per-scene", "2", "--agent", str(out / "best.pt"),
+                      "--out", str(ev)])  # fmt: skip
+    assert code == 0
+    summary = json.loads((ev / "summary.json").read_text())[0]
+    assert summary["instructions"] == 6 and 0.0 <= summary["sr"] <= 1.0
+    episodes = json.loads((ev / "episodes.json").read_text())
+    assert all(e["steps"] <= 30 for e in episodes)
+
+
+def test_vln_dt_trains_on_random_walks_and_is_evaluated(tmp_path, capsys):
+    out = tmp_path / "dt"
+    assert main(["--config", str(_config(tmp_path, DT)), "--out", str(out), "--no-progress"]) == 0
+    log = (out / "train.log").read_text()
+    assert "30 random walks" in log
+    bundle = AgentBundle.load(out / "best.pt")
+    assert bundle.agent == "vln_dt" and bundle.model.cfg.context == 4
+    capsys.readouterr()
+    ev = tmp_path / "eval"
+    code = eval_main(["--scenes", "proc-3", "--per-scene", "1", "--skip", "3", "--agent",
+                      str(out / "best.pt"), "--out", str(ev)])  # fmt: skip
+    assert code == 0 and json.loads((ev / "summary.json").read_text())[0]["instructions"] == 3
+
+
+def test_same_seed_same_run_and_resume_continues_exactly(tmp_path):
+    cfg = read_config(_config(tmp_path, CM), None, [])
+    Trainer(cfg, tmp_path / "a", progress=False).run()
+    short = read_config(_config(tmp_path, CM), None, ["iterations=2"])
+    Trainer(short, tmp_path / "b", progress=False).run()
+    resumed = Trainer(cfg, tmp_path / "b", progress=False)
+    resumed.run(resume=True)
+    assert "resumed at iteration 2" in (tmp_path / "b" / "train.log").read_text()
+    for x, y in zip(_weights(tmp_path / "a" / "checkpoint.pt"),
+                    _weights(tmp_path / "b" / "checkpoint.pt"), strict=True):  # fmt: skip
+        torch.testing.assert_close(x, y)
+    other = read_config(_config(tmp_path, CM), None, ["lr=0.5"])
+    with pytest.raises(InvalidArgumentError, match="another config"):
+        Trainer(other, tmp_path / "b", progress=False).run(resume=True)
+
+
+def test_config_errors(tmp_path, capsys):
+    with pytest.raises(MissingDataError, match="agents/configs"):
+        read_config(tmp_path / "none.json", None, [])
+    with pytest.raises(InvalidArgumentError, match="unknown config keys"):
+        read_config(_config(tmp_path, {**CM, "epochs": 3}), None, [])
+    with pytest.raises(InvalidArgumentError, match="is for 'vln_cm'"):
+        read_config(_config(tmp_path, CM), "vln_dt", [])
+    with pytest.raises(InvalidArgumentError, match="random_fraction"):
+        read_config(_config(tmp_path, CM), None, ["random_fraction=2"])
+    assert main(["--config", str(_config(tmp_path, CM)), "--set", "feedback=beam"]) == 2
+    assert "feedback 'beam' unknown" in capsys.readouterr().err
