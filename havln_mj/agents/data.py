@@ -14,33 +14,12 @@ The people seed is the run's; procedural people and features use it too.
 
 from __future__ import annotations
 
-import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from havln_mj.errors import InvalidArgumentError
+from havln_mj.scene.ids import expand_scene_ranges
 from havln_mj.tasks.datasets import Episode, Instruction, load_dataset
-
-_RANGE = re.compile(r"proc-(\d+):(\d+)")
-
-
-def expand_scenes(scenes: Sequence[str]) -> list[str]:
-    """Scene ids with ``proc-A:B`` ranges written out.
-
-    Raises:
-        InvalidArgumentError: An empty range.
-    """
-    out: list[str] = []
-    for s in scenes:
-        m = _RANGE.fullmatch(s)
-        if m is None:
-            out.append(s)
-            continue
-        a, b = int(m[1]), int(m[2])
-        if b <= a:
-            raise InvalidArgumentError(f"scene range {s!r} is empty; write proc-A:B with A < B")
-        out += [f"proc-{k}" for k in range(a, b)]
-    return out
 
 
 def split_episodes(
@@ -59,7 +38,7 @@ def split_episodes(
     if "scenes" in keys and keys <= {"scenes", "per_scene", "skip"}:
         from havln_mj.eval.run import procedural_episodes
 
-        scenes = expand_scenes(spec["scenes"])
+        scenes = expand_scene_ranges(spec["scenes"])
         return procedural_episodes(
             scenes, int(spec.get("per_scene", 20)), seed, int(spec.get("skip", 0))
         )

@@ -35,6 +35,7 @@ from tqdm import tqdm
 
 from havln_mj.cache import atomic_write_bytes, atomic_write_json
 from havln_mj.errors import HavlnError, InvalidArgumentError
+from havln_mj.scene.ids import expand_scene_ranges
 from havln_mj.sim.simulator import Simulator
 from havln_mj.tasks.datasets import Episode, load_dataset
 from havln_mj.tasks.experts import (
@@ -177,7 +178,9 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="python -m havln_mj.eval", description=__doc__.splitlines()[0])
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--dataset", nargs="+", help="R2R/HA-R2R JSON files or split names")
-    src.add_argument("--scenes", nargs="+", help="procedural scene ids (proc-<seed>)")
+    src.add_argument(
+        "--scenes", nargs="+", help="procedural scene ids (proc-<seed>; proc-A:B for a range)"
+    )
     p.add_argument("--split", default=None, help="name of the split in the tables")
     p.add_argument("--per-scene", type=int, default=10, help="episodes per procedural scene")
     p.add_argument(
@@ -214,7 +217,8 @@ def run_cli(args: argparse.Namespace, evaluate: SplitRunner = evaluate_split) ->
         make_agent(args.agent, args)  # fail at once on a bad agent
         splits: list[tuple[str, list[Episode]]] = []
         if args.scenes:
-            episodes = procedural_episodes(args.scenes, args.per_scene, args.seed, args.skip)
+            scenes = expand_scene_ranges(args.scenes)
+            episodes = procedural_episodes(scenes, args.per_scene, args.seed, args.skip)
             splits.append((args.split or "procedural", episodes))
         else:
             for name in args.dataset:

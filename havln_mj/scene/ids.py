@@ -72,3 +72,25 @@ def parse_scene_id(text: str, known: list[str] | None = None) -> SceneId:
     raise UnknownSceneError(
         f"unknown scene id {text!r}: valid forms are {VALID_FORMS}.{_suggestion(text, known or [])}"
     )
+
+
+_PROC_RANGE = re.compile(r"proc-(\d+):(\d+)")
+
+
+def expand_scene_ranges(scenes: list[str] | tuple[str, ...]) -> list[str]:
+    """Scene ids with ``proc-A:B`` written out as ``proc-A`` … ``proc-(B-1)``.
+
+    Raises:
+        UnknownSceneError: An empty range.
+    """
+    out: list[str] = []
+    for s in scenes:
+        m = _PROC_RANGE.fullmatch(s)
+        if m is None:
+            out.append(s)
+            continue
+        a, b = int(m[1]), int(m[2])
+        if b <= a:
+            raise UnknownSceneError(f"scene range {s!r} is empty; write proc-A:B with A < B")
+        out += [f"proc-{k}" for k in range(a, b)]
+    return out

@@ -5,13 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from havln_mj.agents.data import expand_scenes, instructions_of, split_episodes
+from havln_mj.agents.data import instructions_of, split_episodes
 from havln_mj.agents.demos import Demo
 from havln_mj.agents.features import FeatureStore
 from havln_mj.agents.observations import PROPRIO_DIM
 from havln_mj.agents.rollouts import EgoRollouts, collect_demos, make_simulator
 from havln_mj.agents.views import ViewConfig
-from havln_mj.errors import InvalidArgumentError
+from havln_mj.errors import InvalidArgumentError, UnknownSceneError
+from havln_mj.scene.ids import expand_scene_ranges
 from havln_mj.sim.egocentric import EgoAction
 from havln_mj.tasks.vocab import Vocabulary
 
@@ -33,9 +34,9 @@ def setup(tmp_path_factory):
 
 
 def test_split_specs():
-    assert expand_scenes(["proc-2:5", "x"]) == ["proc-2", "proc-3", "proc-4", "x"]
-    with pytest.raises(InvalidArgumentError, match="empty"):
-        expand_scenes(["proc-5:5"])
+    assert expand_scene_ranges(["proc-2:5", "x"]) == ["proc-2", "proc-3", "proc-4", "x"]
+    with pytest.raises(UnknownSceneError, match="empty"):
+        expand_scene_ranges(["proc-5:5"])
     with pytest.raises(InvalidArgumentError, match="valid"):
         split_episodes({"scenes": ["proc-3"], "episodes": 2}, seed=0)
     # skip: new paths in the same houses, the same people.
