@@ -53,7 +53,7 @@ class AgentBundle:
         model: The network.
         model_config: Its configuration (``CMConfig`` / ``DTConfig`` fields).
         vocab: The instruction vocabulary.
-        encoder: The view encoder its features come from.
+        encoder: The view encoder its features come from (ours, or a user's ResNet-152).
         features: How the features are rendered.
         state: Training state for resuming (iteration, optimiser, generators, history, config).
     """
@@ -62,7 +62,7 @@ class AgentBundle:
     model: nn.Module
     model_config: dict
     vocab: Vocabulary
-    encoder: ViewEncoder
+    encoder: nn.Module
     features: FeatureSpec
     state: dict[str, Any] = field(default_factory=dict)
 
@@ -75,7 +75,12 @@ class AgentBundle:
             "model_config": self.model_config,
             "state_dict": self.model.state_dict(),
             "vocab": list(self.vocab.tokens),
-            "encoder": {"config": self.encoder.config(), "state_dict": self.encoder.state_dict()},
+            # A user's ResNet-152 is referenced by its file (the spec), not copied (230 MB).
+            "encoder": (
+                {"config": self.encoder.config(), "state_dict": self.encoder.state_dict()}
+                if isinstance(self.encoder, ViewEncoder)
+                else None
+            ),
             "features": spec,
             "state": self.state,
         }
@@ -106,9 +111,11 @@ class AgentBundle:
         try:
             model = build_model(blob["agent"], blob["model_config"])
             model.load_state_dict(blob["state_dict"])
-            encoder = ViewEncoder.from_config(blob["encoder"]["config"])
-            encoder.load_state_dict(blob["encoder"]["state_dict"])
             features = FeatureSpec.from_dict(blob["features"])
+            encoder = features.fixed_encoder()
+            if encoder is None:
+                encoder = ViewEncoder.from_config(blob["encoder"]["config"])
+                encoder.load_state_dict(blob["encoder"]["state_dict"])
         except (KeyError, TypeError, RuntimeError) as exc:
             raise MalformedDataError(f"checkpoint {path} is damaged: {exc}") from None
         return cls(

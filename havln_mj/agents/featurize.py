@@ -25,7 +25,7 @@ from tqdm import tqdm
 
 from havln_mj.agents.features import FeatureStore
 from havln_mj.agents.views import REGION_CODES, ViewConfig, ViewpointViews, ViewRenderer
-from havln_mj.agents.vision import ViewEncoder, encode_views, pretrain_encoder
+from havln_mj.agents.vision import ViewEncoder, encode_views, load_resnet152, pretrain_encoder
 from havln_mj.cache import atomic_write_bytes
 from havln_mj.errors import HavlnError, InvalidArgumentError, MalformedDataError, MissingDataError
 
@@ -43,6 +43,10 @@ class FeatureSpec:
         pretrain_viewpoints: Viewpoints drawn per pretraining scene.
         pretrain_epochs: Pretraining epochs.
         seed: People seed of the renders (the dataset's) and pretraining seed.
+        resnet152: A user-supplied ImageNet ResNet-152 weights file: its 2048-d pooled RGB
+            features replace the encoder trained here (HA3D's features; nothing is pretrained).
+        resnet_input: ``(height, width)`` views are resized to for ResNet-152 (None: as
+            rendered; ImageNet models expect about 224 × 224).
     """
 
     view: ViewConfig = field(default_factory=ViewConfig)
@@ -51,6 +55,20 @@ class FeatureSpec:
     pretrain_viewpoints: int = 16
     pretrain_epochs: int = 4
     seed: int = 0
+    resnet152: str | None = None
+    resnet_input: tuple[int, int] | None = None
+
+    def fixed_encoder(self) -> torch.nn.Module | None:
+        """The user's ResNet-152 when :attr:`resnet152` names one, else None.
+
+        Raises:
+            MissingDataError: The weights file does not exist.
+            MalformedDataError: It is not a ResNet-152 state_dict.
+        """
+        if self.resnet152 is None:
+            return None
+        size = None if self.resnet_input is None else tuple(self.resnet_input)
+        return load_resnet152(self.resnet152, input_size=size)
 
     @classmethod
     def from_dict(cls, d: dict) -> FeatureSpec:
@@ -75,7 +93,7 @@ def encoder_digest(encoder: torch.nn.Module) -> str:
     return h.hexdigest()[:12]
 
 
-def feature_store(encoder: ViewEncoder, spec: FeatureSpec) -> FeatureStore:
+def feature_store(encoder: torch.nn.Module, spec: FeatureSpec) -> FeatureStore:
     """The cached feature set of ``encoder`` under ``spec``'s views and people seed."""
     name = f"{encoder_digest(encoder)}-{spec.view.key()}-seed{spec.seed}"
     return FeatureStore.named(name, spec.view, encoder.out_dim)
@@ -211,14 +229,15 @@ def build_features(
         connectivity_dir=connectivity_dir,
         human_placements=human_placements,
     ) as renderer:
+        history = None
+        encoder = encoder or spec.fixed_encoder()
         if encoder is None:
             chosen = list(pretrain_on or scenes[: spec.pretrain_scenes])
             encoder, history = pretrain(renderer, chosen, spec, progress)
-        else:
-            history = None
         store = feature_store(encoder, spec)
-        if not (store.folder / "encoder.pt").is_file():
-            save_encoder(encoder, store.folder / "encoder.pt", history)
+        if not (store.folder / "features.json").is_file():
+            if isinstance(encoder, ViewEncoder):
+                save_encoder(encoder, store.folder / "encoder.pt", history)
             store.write_meta({"spec": {**asdict(spec), "view": asdict(spec.view)}})
         encode_scans(renderer, encoder, store, scenes, progress)
     return encoder, store
@@ -231,6 +250,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     p.add_argument("--scenes", nargs="+", required=True, help="scene ids (proc-<seed>, scan ids)")
     p.add_argument("--encoder", type=Path, default=None, help="trained encoder file (.pt)")
+    p.add_argument(
+        "--resnet152", type=Path, default=None, help="ImageNet ResNet-152 weights (instead)"
+    )
     p.add_argument("--seed", type=int, default=0, help="people seed (the dataset's)")
     p.add_argument("--connectivity-dir", type=Path, default=None)
     p.add_argument("--human-placements", type=Path, default=None)
@@ -239,7 +261,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         encoder = load_encoder(args.encoder) if args.encoder else None
         _, store = build_features(
             args.scenes,
-            FeatureSpec(seed=args.seed),
+            FeatureSpec(
+                seed=args.seed,
+                resnet152=None if args.resnet152 is None else str(args.resnet152),
+                resnet_input=None if args.resnet152 is None else (224, 224),
+            ),
             encoder=encoder,
             connectivity_dir=args.connectivity_dir,
             human_placements=args.human_placements,

@@ -183,11 +183,13 @@ def _encoder_for(
     cfg: TrainConfig, spec: FeatureSpec, scenes: list[str], progress: bool
 ) -> tuple[ViewEncoder, FeatureStore]:
     """The view encoder (pretrained once per spec and scenes, cached) and the feature set."""
+    render = {"connectivity_dir": cfg.connectivity_dir, "human_placements": cfg.human_placements}
+    if spec.resnet152 is not None:
+        return build_features(scenes, spec, progress=progress, **render)
     pretrain_on = scenes[: spec.pretrain_scenes]
     key = json.dumps({"spec": asdict(spec), "scenes": pretrain_on}, sort_keys=True, default=str)
     path = cache_dir("agents", "encoders") / f"{hashlib.sha1(key.encode()).hexdigest()[:16]}.pt"
     encoder = load_encoder(path) if path.is_file() else None
-    render = {"connectivity_dir": cfg.connectivity_dir, "human_placements": cfg.human_placements}
     encoder, store = build_features(
         scenes, spec, encoder=encoder, pretrain_on=pretrain_on, progress=progress, **render
     )

@@ -122,3 +122,22 @@ def test_config_checks():
         CMConfig(vocab_size=5, obs_dim=3, dropout=1.0)
     with pytest.raises(InvalidArgumentError, match="before reset"):
         CMPolicy(_model()).act(np.zeros(D), np.ones(6, bool))
+
+
+def test_a_users_resnet152_is_referenced_not_copied(tmp_path):
+    from havln_mj.agents.vision import ResNetFeatures, resnet152
+
+    weights = tmp_path / "resnet152.pth"
+    torch.save(resnet152().state_dict(), weights)
+    spec = FeatureSpec(resnet152=str(weights), resnet_input=(64, 64))
+    encoder = spec.fixed_encoder()
+    assert isinstance(encoder, ResNetFeatures) and encoder.out_dim == 2048
+    model = _model().eval()
+    vocab = Vocabulary([f"w{i}" for i in range(18)])
+    AgentBundle("vln_cm", model, model.cfg.__dict__, vocab, encoder, spec).save(tmp_path / "a.pt")
+    assert (tmp_path / "a.pt").stat().st_size < weights.stat().st_size / 20
+    loaded = AgentBundle.load(tmp_path / "a.pt")
+    assert isinstance(loaded.encoder, ResNetFeatures) and loaded.features.resnet152 == str(weights)
+    weights.unlink()
+    with pytest.raises(MissingDataError, match="resnet152.pth"):
+        AgentBundle.load(tmp_path / "a.pt")
