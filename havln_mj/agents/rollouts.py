@@ -68,8 +68,8 @@ class _ElementView:
         self._rollouts, self._i = rollouts, i
         self.half_hfov = rollouts.sim.half_hfov
 
-    def getHumanState(self) -> list[list]:  # noqa: N802 - the simulator's name
-        return [self._rollouts.human_states()[self._i]]
+    def getHumanPositions(self) -> list[np.ndarray]:  # noqa: N802 - the simulator's name
+        return [self._rollouts.human_positions()[self._i]]
 
 
 @dataclass(frozen=True)
@@ -114,13 +114,13 @@ class EgoRollouts:
         self.steps = np.zeros(0, int)
         self._experts: list[HumanAwareExpert] = []
         self._contexts: list[ExpertContext] = []
-        self._humans: list[list] | None = None
+        self._humans: list[np.ndarray] | None = None
         self._distance = np.zeros(0)
 
-    def human_states(self) -> list[list]:
-        """Every element's people now (computed once per step)."""
+    def human_positions(self) -> list[np.ndarray]:
+        """Every element's people's pelvis positions now (computed once per step)."""
         if self._humans is None:
-            self._humans = self.sim.getHumanState()
+            self._humans = self.sim.getHumanPositions()
         return self._humans
 
     def _graph(self, scan: str) -> NavGraph:

@@ -857,6 +857,20 @@ class Simulator:
             raise NotInitializedError("getHumanState called before newEpisode()")
         return [a.crowd.states(a.time) for a in self._agents]
 
+    def getHumanPositions(self) -> list[np.ndarray]:  # noqa: N802 - getHumanState's sibling
+        """Each element's people's pelvis positions ``(K, 3)`` at the element's time.
+
+        The ``position`` of every :meth:`getHumanState` entry, without computing the rest.
+        """
+        if not self._agents:
+            raise NotInitializedError("getHumanPositions called before newEpisode()")
+        out = []
+        for a in self._agents:
+            out.append(
+                a.crowd.positions(np.array([a.time]))[0] if len(a.crowd) else np.zeros((0, 3))
+            )
+        return out
+
     # ------------------------------------------------------------------ timing
 
     def resetTimers(self) -> None:  # noqa: N802

@@ -298,6 +298,84 @@ def ego_plan(
     return None
 
 
+class EgoRoutes:
+    """Egocentric cost-to-go on one graph for any goal and avoided viewpoints (cached).
+
+    The costs of :func:`ego_plan` (metres, plus :data:`TURN_COST` per turn) over the states
+    (viewpoint, heading on the 30° lattice), found by one backward search per (goal, avoided
+    set) instead of a forward search per state: a teacher that labels every state a learner
+    reaches asks for the same few tables again and again.
+
+    Args:
+        graph: The navigation graph.
+        half_hfov: FORWARD's half field of view.
+        cache_size: Tables kept (least recently used dropped).
+    """
+
+    def __init__(self, graph: NavGraph, half_hfov: float, cache_size: int = 256) -> None:
+        self.graph, self.half_hfov, self.cache_size = graph, half_hfov, cache_size
+        self._n = round(2 * math.pi / TURN)
+        self._ahead: dict[tuple[str, int], tuple[str, float]] = {}
+        self._into: dict[tuple[str, int], list[tuple[str, float]]] = {}
+        for vp in graph.nodes:
+            for k in range(self._n):
+                target = forward_target(graph, vp, k * TURN, 0.0, half_hfov)
+                if target is not None:
+                    length = math.dist(graph.position(vp), graph.position(target))
+                    self._ahead[(vp, k)] = (target, length)
+                    self._into.setdefault((target, k), []).append((vp, length))
+        self._tables: dict[tuple[str, frozenset[str]], dict[tuple[str, int], float]] = {}
+
+    def heading_step(self, heading: float) -> int | None:
+        """The lattice step of ``heading``, or None when it is off the 30° lattice."""
+        k = round(heading / TURN)
+        return k % self._n if abs(heading - k * TURN) < 1e-6 else None
+
+    def cost_to_go(self, goal: str, avoid: frozenset[str]) -> dict[tuple[str, int], float]:
+        """Cost from every state to ``goal`` without FORWARD into ``avoid`` (absent: none)."""
+        key = (goal, avoid)
+        table = self._tables.pop(key, None)
+        if table is None:
+            table = {}
+            heap = [(0.0, goal, k) for k in range(self._n)]
+            while heap:
+                d, vp, k = heapq.heappop(heap)
+                if (vp, k) in table:
+                    continue
+                table[(vp, k)] = d
+                prev = [(vp, (k - 1) % self._n, TURN_COST), (vp, (k + 1) % self._n, TURN_COST)]
+                if vp not in avoid or vp == goal:
+                    prev += [(u, k, length) for u, length in self._into.get((vp, k), ())]
+                for u, j, cost in prev:
+                    if (u, j) not in table:
+                        heapq.heappush(heap, (d + cost, u, j))
+            if len(self._tables) >= self.cache_size:
+                self._tables.pop(next(iter(self._tables)))
+        self._tables[key] = table
+        return table
+
+    def first_action(
+        self, here: str, step: int, goal: str, avoid: frozenset[str]
+    ) -> EgoAction | None:
+        """The first action of a cheapest route (FORWARD, then right, then left on ties).
+
+        Returns:
+            STOP at the goal; None when no route avoids ``avoid``.
+        """
+        if here == goal:
+            return STOP
+        table = self.cost_to_go(goal, avoid - {here})
+        best, action = math.inf, None
+        ahead = self._ahead.get((here, step))
+        if ahead is not None and (ahead[0] not in avoid or ahead[0] == goal):
+            best, action = ahead[1] + table.get((ahead[0], step), math.inf), EgoAction.FORWARD
+        for turn, j in ((EgoAction.TURN_RIGHT, step + 1), (EgoAction.TURN_LEFT, step - 1)):
+            cost = TURN_COST + table.get((here, j % self._n), math.inf)
+            if cost < best - 1e-9:
+                best, action = cost, turn
+        return action if math.isfinite(best) else None
+
+
 def _sim_half_hfov(sim: object) -> float:
     # The simulator's own half-HFOV rule decides FORWARD.
     return float(getattr(sim, "half_hfov", DEFAULT_HALF_HFOV))
@@ -406,8 +484,6 @@ class HumanAwareExpert:
             without a route around people).
     """
 
-    _MEMO_SIZE = 200_000  # egocentric first actions kept; a training run revisits states
-
     def __init__(
         self,
         mode: str = "local",
@@ -439,12 +515,11 @@ class HumanAwareExpert:
         self._route: list[str] | None = None
         self._avoid: frozenset[str] = frozenset()  # global mode, egocentric actions
         self._hfov = DEFAULT_HALF_HFOV
-        self._memo: dict[tuple, tuple[EgoAction, bool]] = {}
+        self._routes: dict[str, EgoRoutes] = {}
 
     @staticmethod
     def _people(ctx: ExpertContext) -> np.ndarray:
-        states = ctx.sim.getHumanState()[0]
-        return np.array([p.position for p in states], float).reshape(-1, 3)
+        return np.asarray(ctx.sim.getHumanPositions()[0], float).reshape(-1, 3)
 
     def _global_route(self, ctx: ExpertContext, here: str) -> list[str] | None:
         blocked = blocked_nodes(ctx.graph, self._people(ctx), self.clearance, (here, ctx.goal))
@@ -474,20 +549,21 @@ class HumanAwareExpert:
             avoid = frozenset(blocked_nodes(graph, near, self.clearance, (here, goal)))
         else:
             avoid = self._avoid - {here}
-        step = round(wrap_angle(state.heading) / TURN) % round(2 * math.pi / TURN)
-        key = (ctx.episode.scan, here, step, goal, avoid, self._hfov)
-        memo = self._memo.get(key)
-        if memo is None:
+        routes = self._routes.get(ctx.episode.scan)
+        if routes is None or routes.graph is not graph or routes.half_hfov != self._hfov:
+            routes = self._routes[ctx.episode.scan] = EgoRoutes(graph, self._hfov)
+        step = routes.heading_step(state.heading)
+        if step is None:  # continuous headings: plan from here
             plan = ego_plan(graph, here, state.heading, goal, self._hfov, avoid)
-            boxed_in = plan is None
-            if boxed_in:
+            if plan is None:
+                self.waits += 1
                 plan = ego_plan(graph, here, state.heading, goal, self._hfov)
-            memo = (STOP if plan is None else plan[0], boxed_in)
-            if len(self._memo) >= self._MEMO_SIZE:
-                self._memo.clear()
-            self._memo[key] = memo
-        self.waits += memo[1]
-        return memo[0]
+            return STOP if plan is None else plan[0]
+        action = routes.first_action(here, step, goal, avoid)
+        if action is None:
+            self.waits += 1
+            action = routes.first_action(here, step, goal, frozenset())
+        return STOP if action is None else action
 
     def act(self, ctx: ExpertContext, state: SimState) -> Action:
         """The next action: teacher towards the planned next node, WAIT when blocked."""

@@ -17,12 +17,17 @@ from havln_mj.sim.egocentric import EgoAction
 from havln_mj.tasks.datasets import Episode, load_dataset
 from havln_mj.tasks.experts import (
     STOP,
+    TURN,
+    TURN_COST,
     WAIT,
+    EgoRoutes,
     HumanAwareExpert,
     RandomWalkExpert,
     ShortestPathExpert,
     StepRecord,
     blocked_nodes,
+    ego_plan,
+    forward_target,
     plan_path,
     run_expert,
 )
@@ -176,6 +181,42 @@ def test_egocentric_human_aware_expert_walks_around_a_person(graph):
         assert tr.stopped and tr.final_viewpoint == c, mode
         assert all(isinstance(r.action, EgoAction) for r in tr.steps)
         assert m not in tr.path and expert.waits == 0, mode
+
+
+def test_ego_routes_match_ego_plan_costs(graph):
+    # The backward tables give routes exactly as cheap as ego_plan's forward search.
+    def cost(actions, start, heading):
+        total, vp = 0.0, start
+        for a in actions:
+            if a is EgoAction.FORWARD:
+                nxt = forward_target(graph, vp, heading, 0.0, 0.5)
+                total, vp = total + math.dist(graph.position(vp), graph.position(nxt)), nxt
+            elif a is not STOP:
+                total += TURN_COST
+                heading += TURN if a is EgoAction.TURN_RIGHT else -TURN
+        return total, vp
+
+    routes = EgoRoutes(graph, 0.5)
+    rng = np.random.default_rng(0)
+    avoid = frozenset(graph.nodes[3:6])
+    for _ in range(30):
+        start, goal = (graph.nodes[int(i)] for i in rng.integers(len(graph.nodes), size=2))
+        k = int(rng.integers(12))
+        for blocked in (frozenset(), avoid - {start, goal}):
+            plan = ego_plan(graph, start, k * TURN, goal, 0.5, blocked)
+            if plan is None:
+                assert routes.first_action(start, k, goal, blocked) is None
+                continue
+            walked, vp, step = [], start, k
+            while (a := routes.first_action(vp, step, goal, blocked)) is not STOP:
+                walked.append(a)
+                if a is EgoAction.FORWARD:
+                    vp = forward_target(graph, vp, step * TURN, 0.0, 0.5)
+                    assert vp not in blocked
+                else:
+                    step = (step + (1 if a is EgoAction.TURN_RIGHT else -1)) % 12
+            assert vp == goal
+            assert math.isclose(cost(walked, start, k * TURN)[0], cost(plan, start, k * TURN)[0])
 
 
 def test_egocentric_expert_goes_on_when_no_route_avoids_people(graph):
