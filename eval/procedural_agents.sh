@@ -22,8 +22,8 @@ train() {  # name config overrides...
 
 evaluate() {  # name agent
     local out="$RUNS/eval/$1"
-    python -m havln_mj.eval "${SEEN[@]}" --agent "$2" --out "$out/seen" >/dev/null
-    python -m havln_mj.eval "${UNSEEN[@]}" --agent "$2" --out "$out/unseen" >/dev/null
+    python -m havln_mj.eval "${SEEN[@]}" --agent "$2" --threads "$THREADS" --out "$out/seen" >/dev/null
+    python -m havln_mj.eval "${UNSEEN[@]}" --agent "$2" --threads "$THREADS" --out "$out/unseen" >/dev/null
     python - "$out" <<'PY'
 import json, sys
 from pathlib import Path

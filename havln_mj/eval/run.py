@@ -69,6 +69,11 @@ def make_agent(
     if name.endswith(".pt"):
         from havln_mj.agents.policy import load_agent  # torch: only for trained agents
 
+        if getattr(args, "threads", None):
+            import torch
+
+            torch.set_num_threads(args.threads)
+
         return load_agent(
             name,
             seed=getattr(args, "seed", 0),
@@ -199,6 +204,9 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument("--human-placements", type=Path, default=None)
     p.add_argument("--data-dir", type=Path, default=None, help="folder with r2r/ and ha_r2r/")
     p.add_argument("--out", type=Path, default=Path("havln_eval"))
+    p.add_argument(
+        "--threads", type=int, default=None, help="torch threads of a trained agent (1: busy CPU)"
+    )
     return p.parse_args(argv)
 
 
