@@ -49,7 +49,7 @@ from havln_mj.agents.vision import ViewEncoder
 from havln_mj.agents.vln_cm import START, VLNCM, sequence_loss
 from havln_mj.cache import atomic_write_bytes, atomic_write_json
 from havln_mj.errors import HavlnError, InvalidArgumentError, MissingDataError
-from havln_mj.paths import cache_dir
+from havln_mj.paths import cache_dir, project_home
 from havln_mj.tasks.datasets import Instruction
 from havln_mj.tasks.rewards import StepOutcome, get_reward
 from havln_mj.tasks.vocab import Vocabulary
@@ -141,15 +141,23 @@ class TrainConfig:
 
 
 def read_config(path: Path, agent: str | None, overrides: Sequence[str]) -> TrainConfig:
-    """The config file with ``key=value`` overrides (values parsed as JSON when they parse).
+    """A config file (or a built-in config's name) with ``key=value`` overrides.
+
+    Override values are parsed as JSON when they parse, else taken as strings.
 
     Raises:
         MissingDataError: No such file.
         InvalidArgumentError: Bad JSON, an override without ``=``, or an agent mismatch.
     """
     path = Path(path).expanduser()
+    if not path.is_file() and len(path.parts) == 1:  # a built-in config by name
+        builtin = project_home() / "agents" / "configs" / path.with_suffix(".json").name
+        path = builtin if builtin.is_file() else path
     if not path.is_file():
-        raise MissingDataError(f"config file {path} does not exist (see agents/configs/)")
+        raise MissingDataError(
+            f"config file {path} does not exist; give a file or a name from agents/configs/ "
+            "(vln_cm, vln_dt, vln_cm_smoke, vln_dt_smoke, ...)"
+        )
     try:
         d = json.loads(path.read_text())
     except json.JSONDecodeError as exc:
@@ -589,7 +597,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         prog="python -m havln_mj.agents.train", description=__doc__.splitlines()[0]
     )
     p.add_argument("--agent", choices=AGENTS, default=None)
-    p.add_argument("--config", type=Path, required=True, help="JSON config (agents/configs/)")
+    p.add_argument(
+        "--config", type=Path, required=True, help="JSON file, or a name in agents/configs/"
+    )
     p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
     p.add_argument("--out", type=Path, default=None, help="output folder (default runs/<agent>)")
     p.add_argument("--resume", action="store_true", help="continue from OUT/checkpoint.pt")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,31 +15,8 @@ from havln_mj.agents.train import Trainer, main, read_config  # noqa: E402
 from havln_mj.errors import InvalidArgumentError, MissingDataError  # noqa: E402
 from havln_mj.eval.run import main as eval_main  # noqa: E402
 
-TINY = {
-    "train": {"scenes": ["proc-3:5"], "per_scene": 3},
-    "val": {"scenes": ["proc-3:5"], "per_scene": 1, "skip": 3},
-    "features": {
-        "view": {"width": 32, "height": 24, "slots": 2},
-        "encoder": {"widths": [8, 16], "blocks": [1, 1], "out_dim": 16},
-        "pretrain_scenes": 2,
-        "pretrain_viewpoints": 3,
-        "pretrain_epochs": 1,
-    },
-    "iterations": 4,
-    "batch_size": 4,
-    "rollout_batch": 4,
-    "eval_every": 2,
-    "log_every": 2,
-    "random_walks": 30,
-    "max_steps": 20,
-}
-CM = {**TINY, "agent": "vln_cm", "model": {"word_dim": 8, "hidden": 16, "action_dim": 4},
-      "feedback": "mixed", "random_fraction": 0.5}  # fmt: skip
-
-
-DT = {**TINY, "agent": "vln_dt", "batch_size": 8,
-      "model": {"d_model": 16, "n_layers": 1, "n_heads": 2, "context": 4,
-                "text": {"d_model": 16, "n_layers": 1, "n_heads": 2, "max_len": 80}}}  # fmt: skip
+CM = read_config(Path("vln_cm_smoke"), None, []).__dict__ | {"agent": "vln_cm"}
+DT = read_config(Path("vln_dt_smoke"), None, []).__dict__ | {"agent": "vln_dt"}
 
 
 def _config(tmp_path, d, name="c.json"):
@@ -104,6 +82,7 @@ def test_same_seed_same_run_and_resume_continues_exactly(tmp_path):
 
 
 def test_config_errors(tmp_path, capsys):
+    assert read_config(Path("vln_cm_smoke"), "vln_cm", []).iterations == 4  # built-in by name
     with pytest.raises(MissingDataError, match="agents/configs"):
         read_config(tmp_path / "none.json", None, [])
     with pytest.raises(InvalidArgumentError, match="unknown config keys"):
