@@ -139,5 +139,5 @@ def test_a_users_resnet152_is_referenced_not_copied(tmp_path):
     loaded = AgentBundle.load(tmp_path / "a.pt")
     assert isinstance(loaded.encoder, ResNetFeatures) and loaded.features.resnet152 == str(weights)
     weights.unlink()
-    with pytest.raises(MissingDataError, match="resnet152.pth"):
+    with pytest.raises(MissingDataError, match=r"resnet152\.pth"):
         AgentBundle.load(tmp_path / "a.pt")
