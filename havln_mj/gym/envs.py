@@ -55,12 +55,12 @@ import numpy as np
 from gymnasium import spaces
 
 from havln_mj.errors import InvalidActionError, InvalidArgumentError, NotInitializedError
-from havln_mj.tasks.vocab import Vocabulary
 from havln_mj.sim.egocentric import EgoAction
 from havln_mj.sim.simulator import ROBOT_ACTIONS, Simulator
 from havln_mj.sim.state import SimState
 from havln_mj.tasks.datasets import Episode, Instruction, load_dataset
 from havln_mj.tasks.rewards import SUCCESS_DISTANCE, RewardFn, StepOutcome, get_reward
+from havln_mj.tasks.vocab import Vocabulary
 
 DEFAULT_SCENES = ("proc-0",)
 MAX_CANDIDATE_DISTANCE = 50.0  # metres; candidate distances are clipped so the Box is bounded
