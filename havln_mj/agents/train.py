@@ -359,6 +359,9 @@ class Trainer:
         self.data = prepare_data(cfg, progress)
         dims = {"vocab_size": len(self.data.vocab), "obs_dim": self.data.store.dim + PROPRIO_DIM}
         self.model_config = {**cfg.model, **dims}
+        text = self.model_config.get("text") or {}
+        if "bert" in text:  # BERT reads words: the model keeps the vocabulary
+            self.model_config["text"] = {**text, "vocab": list(self.data.vocab.tokens)}
         self.model = build_model(cfg.agent, self.model_config)
         self.optimizer = torch.optim.AdamW(
             self.model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay

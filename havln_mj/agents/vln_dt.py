@@ -35,7 +35,7 @@ from torch import nn
 from torch.nn import functional as F  # noqa: N812 - torch's convention
 
 from havln_mj.agents.demos import N_ACTIONS, Demo
-from havln_mj.agents.text import TextTransformer
+from havln_mj.agents.text import BertTextEncoder, TextTransformer
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.tasks.rewards import RewardFn, get_reward
 
@@ -65,7 +65,10 @@ class DTConfig:
         context: Window length in steps (three tokens each).
         max_timestep: Size of the timestep embedding; rollouts must be at most this long.
         text: Keyword arguments of :class:`~havln_mj.agents.text.TextTransformer` (``d_model``,
-            ``n_layers``, ``n_heads``, ``max_len``, optionally ``dropout``).
+            ``n_layers``, ``n_heads``, ``max_len``, optionally ``dropout``); or, to read
+            instructions with a BERT from local weights instead, ``bert`` (its folder),
+            ``vocab`` (the vocabulary's tokens; the trainer fills it), ``d_model`` (the size
+            BERT's outputs are projected to) and ``max_len``.
         fusion: ``"attention"`` (the observation queries the instruction tokens) or
             ``"concat"`` (pooled instruction ⊕ observation).
         target_return: Return-to-go the policy starts from.
@@ -155,8 +158,23 @@ class DecisionTransformer(nn.Module):
         super().__init__()
         self.cfg = cfg
         d = cfg.d_model
-        self.text = TextTransformer(cfg.vocab_size, **{"dropout": cfg.dropout, **cfg.text})
-        d_text = int(cfg.text.get("d_model", 128))
+        text = dict(cfg.text)
+        bert, words = text.pop("bert", None), text.pop("vocab", None)
+        d_text = int(text.get("d_model", 128))
+        self.text: TextTransformer | None = None
+        self._bert: BertTextEncoder | None = None
+        if bert is None:
+            self.text = TextTransformer(cfg.vocab_size, **{"dropout": cfg.dropout, **text})
+        else:
+            if not words or len(words) != cfg.vocab_size:
+                raise InvalidArgumentError(
+                    "DTConfig.text['bert'] needs text['vocab'], the instruction vocabulary's "
+                    f"{cfg.vocab_size} tokens, to turn token ids back into words"
+                )
+            # Frozen and loaded from the user's folder: kept out of the state_dict.
+            object.__setattr__(self, "_bert", BertTextEncoder(bert, int(text.get("max_len", 80))))
+            self._words = list(words)
+            self.bert_proj = nn.Linear(self._bert.out_dim, d_text)
         # Features and proprioceptive inputs come on different scales: normalise first.
         self.obs_proj = nn.Sequential(nn.LayerNorm(cfg.obs_dim), nn.Linear(cfg.obs_dim, d))
         if cfg.fusion == "attention":
@@ -185,7 +203,11 @@ class DecisionTransformer(nn.Module):
             raise InvalidArgumentError(
                 f"instruction must be (B, L) token ids, got shape {tuple(instruction.shape)}"
             )
-        return self.text(instruction.long())
+        if self._bert is None:
+            return self.text(instruction.long())
+        texts = [" ".join(self._words[i] for i in row if i > 0) for row in instruction.tolist()]
+        tokens, pad = self._bert(texts)
+        return self.bert_proj(tokens), pad
 
     def _states(self, obs: torch.Tensor, tokens: torch.Tensor, pad: torch.Tensor) -> torch.Tensor:
         view = self.obs_proj(obs)  # (B, K, d)
@@ -195,7 +217,7 @@ class DecisionTransformer(nn.Module):
             pad = pad & pad.logical_not().any(dim=1, keepdim=True)
             lang, _ = self.cross(view, tokens, tokens, key_padding_mask=pad, need_weights=False)
         else:
-            pooled = self.text_proj(self.text.pooled(tokens, pad))  # (B, d)
+            pooled = self.text_proj(TextTransformer.pooled(tokens, pad))  # (B, d)
             lang = pooled.unsqueeze(1).expand_as(view)
         return self.fuse(torch.cat([view, lang], dim=-1))
 

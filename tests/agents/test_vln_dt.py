@@ -21,7 +21,7 @@ from havln_mj.agents.vln_dt import (  # noqa: E402
     returns_to_go,
     sample_windows,
 )
-from havln_mj.errors import InvalidArgumentError  # noqa: E402
+from havln_mj.errors import InvalidArgumentError, MissingDataError  # noqa: E402
 
 D = 8
 TEXT = {"d_model": 16, "n_layers": 1, "n_heads": 2, "max_len": 12}
@@ -355,3 +355,13 @@ def test_round_trip_gives_identical_logits_and_actions() -> None:
         policy.reset(np.array([5, 6, 7, 0]))
         runs.append([policy.act(obs[t], masks[t], None if t == 0 else -0.1 * t) for t in range(7)])
     assert runs[0] == runs[1]
+
+
+def test_bert_text_needs_the_vocabulary_and_the_users_folder(tmp_path):
+    with pytest.raises(InvalidArgumentError, match="vocab"):
+        DecisionTransformer(small_config(text={"bert": str(tmp_path), "d_model": 16}))
+    words = [f"w{i}" for i in range(small_config().vocab_size)]
+    with pytest.raises(MissingDataError, match="nope"):
+        DecisionTransformer(
+            small_config(text={"bert": str(tmp_path / "nope"), "vocab": words, "d_model": 16})
+        )
