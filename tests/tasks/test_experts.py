@@ -148,9 +148,9 @@ def test_global_variant_plans_around_people_out_of_sight(graph):
     assert m not in glob.last_plan and glob.last_plan[0] == a and glob.last_plan[-1] == c
 
 
-def test_waits_when_boxed_in(graph):
-    # People on every neighbour of a start whose neighbours are all within 4.5 m.
-    start = next(
+def _boxed_in_start(graph):
+    """A viewpoint whose neighbours are all within 4.5 m (people on them box it in)."""
+    return next(
         v
         for v in graph.nodes
         if graph.neighbors(v)
@@ -158,6 +158,11 @@ def test_waits_when_boxed_in(graph):
             np.hypot(*(graph.position(v) - graph.position(n))[:2]) < 4.0 for n in graph.neighbors(v)
         )
     )
+
+
+def test_waits_when_boxed_in(graph):
+    # People on every neighbour of a start whose neighbours are all within 4.5 m.
+    start = _boxed_in_start(graph)
     goal = max(graph.nodes, key=lambda v: graph.distance(start, v))
     people = [_floor_point(graph, n) for n in graph.neighbors(start)]
     sim = _sim(humans=_standing_at(people))
@@ -222,14 +227,7 @@ def test_ego_routes_match_ego_plan_costs(graph):
 def test_egocentric_expert_goes_on_when_no_route_avoids_people(graph):
     # Boxed in (people on every neighbour): the ego set has no wait, so it takes the
     # shortest route anyway instead of stopping beside them, and counts those steps.
-    start = next(
-        v
-        for v in graph.nodes
-        if graph.neighbors(v)
-        and all(
-            np.hypot(*(graph.position(v) - graph.position(n))[:2]) < 4.0 for n in graph.neighbors(v)
-        )
-    )
+    start = _boxed_in_start(graph)
     goal = max(graph.nodes, key=lambda v: graph.distance(start, v))
     sim = _sim(humans=_standing_at([_floor_point(graph, n) for n in graph.neighbors(start)]))
     expert = HumanAwareExpert("local", action_space="ego")
