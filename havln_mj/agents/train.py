@@ -51,7 +51,7 @@ from havln_mj.cache import atomic_write_bytes, atomic_write_json
 from havln_mj.errors import HavlnError, InvalidArgumentError, MissingDataError
 from havln_mj.paths import cache_dir, project_home
 from havln_mj.tasks.datasets import Instruction
-from havln_mj.tasks.rewards import StepOutcome, get_reward
+from havln_mj.tasks.rewards import SUCCESS_DISTANCE, StepOutcome, get_reward
 from havln_mj.tasks.vocab import Vocabulary
 
 FEEDBACKS = ("teacher", "sample", "mixed")
@@ -268,7 +268,7 @@ def evaluate(
                 last[i] = float(sum(fn(out).values()))
                 hits[i] += r.collided[i]
                 final[i] = r.distance[i]
-        results += [(f < 3.0, f, h) for f, h in zip(final, hits, strict=True)]
+        results += [(f < SUCCESS_DISTANCE, f, h) for f, h in zip(final, hits, strict=True)]
     a = np.array(results, float)
     return {
         "sr": float(a[:, 0].mean()),
@@ -280,7 +280,7 @@ def evaluate(
 # ---------------------------------------------------------------------- VLN-CM
 
 
-def _pad_demos(demos: Sequence[Demo], vocab_len: int) -> dict[str, torch.Tensor]:
+def _pad_demos(demos: Sequence[Demo]) -> dict[str, torch.Tensor]:
     """Teacher-forcing tensors of demos, padded to the longest."""
     b, t = len(demos), max(len(d) for d in demos)
     dim = demos[0].obs.shape[1]
@@ -305,7 +305,7 @@ def _pad_demos(demos: Sequence[Demo], vocab_len: int) -> dict[str, torch.Tensor]
 
 def teacher_loss(model: VLNCM, demos: Sequence[Demo]) -> tuple[torch.Tensor, int]:
     """Teacher-forced cross-entropy on demos; the number of steps it covers."""
-    b = _pad_demos(demos, 0)
+    b = _pad_demos(demos)
     logits = model(b["instruction"], b["obs"], b["prev"], b["masks"])
     return sequence_loss(logits, b["targets"], b["valid"]), int(b["valid"].sum())
 
@@ -376,7 +376,7 @@ class Trainer:
         self.iteration = 0
         self.history: list[dict[str, Any]] = []
         self.best = -math.inf
-        self._log = None
+        self._dt_data = None
 
     # -- persistence
 
@@ -478,7 +478,7 @@ class Trainer:
         self._optimise(loss)
         return {"loss": loss.item(), "steps": sum(steps)}
 
-    def _dt_step(self, randoms: list[Demo]) -> dict[str, float]:
+    def _dt_step(self) -> dict[str, float]:
         from havln_mj.agents.vln_dt import dt_loss, sample_windows
 
         batch = sample_windows(
@@ -523,9 +523,7 @@ class Trainer:
         t_train = time.perf_counter()
         while self.iteration < cfg.iterations:
             self.model.train()
-            stats = (
-                self._cm_step(expert, randoms) if cfg.agent == "vln_cm" else self._dt_step(randoms)
-            )
+            stats = self._cm_step(expert, randoms) if cfg.agent == "vln_cm" else self._dt_step()
             self.iteration += 1
             window.append(stats)
             bar.update()
