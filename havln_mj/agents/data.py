@@ -20,6 +20,7 @@ from pathlib import Path
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.scene.ids import expand_scene_ranges
 from havln_mj.tasks.datasets import Episode, Instruction, load_dataset
+from havln_mj.tasks.procedural import procedural_episodes
 
 
 def split_episodes(
@@ -36,8 +37,6 @@ def split_episodes(
     """
     keys = set(spec)
     if "scenes" in keys and keys <= {"scenes", "per_scene", "skip"}:
-        from havln_mj.eval.run import procedural_episodes
-
         scenes = expand_scene_ranges(spec["scenes"])
         return procedural_episodes(
             scenes, int(spec.get("per_scene", 20)), seed, int(spec.get("skip", 0))

@@ -46,7 +46,7 @@ from havln_mj.tasks.experts import (
     run_expert,
 )
 from havln_mj.tasks.metrics import EvalEpisode, Evaluator, MetricConfig
-from havln_mj.tasks.procedural import scene_episodes
+from havln_mj.tasks.procedural import procedural_episodes
 
 AGENTS = ("shortest", "oracle", "oracle-global", "random")
 TABLE = (("NE", "ne"), ("TCR", "tcr"), ("CR", "cr"), ("SR", "sr"))
@@ -98,23 +98,6 @@ def make_agent(
         return getattr(importlib.import_module(module), attr)
     except (ImportError, AttributeError) as exc:
         raise InvalidArgumentError(f"cannot load agent {name!r}: {exc}") from None
-
-
-def procedural_episodes(
-    scenes: Sequence[str], per_scene: int, seed: int, skip: int = 0
-) -> list[Episode]:
-    """HA-R2R episodes generated in procedural houses (see :mod:`havln_mj.tasks.procedural`).
-
-    The people named in them are the ones the simulator places with the same seed. ``skip``
-    leaves out each scene's first paths (another split's: val_seen after train).
-    """
-    from havln_mj.scene.scan import load_scan
-
-    out: list[Episode] = []
-    for s, scene in enumerate(scenes):
-        first = 10_000 * (s + 1)
-        out += scene_episodes(load_scan(scene), per_scene, seed, first_path_id=first, skip=skip)
-    return out
 
 
 def _simulator(args: argparse.Namespace) -> Simulator:

@@ -149,6 +149,21 @@ def scene_episodes(
     return out
 
 
+def procedural_episodes(
+    scenes: Sequence[str], per_scene: int, seed: int, skip: int = 0
+) -> list[Episode]:
+    """Episodes of several procedural scenes (the evaluation harness's ``--scenes``).
+
+    Scene ``s`` (in the given order) gets path ids from ``10_000 * (s + 1)``; ``skip`` leaves
+    out each scene's first paths (another split's: val_seen after train).
+    """
+    out: list[Episode] = []
+    for s, scene in enumerate(scenes):
+        first = SCENE_STRIDE * (s + 1)
+        out += scene_episodes(load_scan(scene), per_scene, seed, first_path_id=first, skip=skip)
+    return out
+
+
 def split_path_id_base(split: str) -> int:
     """First ``path_id`` of a split: ``(k + 1) * PATH_ID_STRIDE`` for the k-th of ``SPLITS``.
 

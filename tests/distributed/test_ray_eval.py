@@ -8,7 +8,8 @@ ray = pytest.importorskip("ray")
 
 from havln_mj.distributed import build_scenes_ray, evaluate_split_ray  # noqa: E402
 from havln_mj.distributed.evaluate import _shards, parse_args  # noqa: E402
-from havln_mj.eval.run import evaluate_split, procedural_episodes  # noqa: E402
+from havln_mj.eval.run import evaluate_split  # noqa: E402
+from havln_mj.tasks.procedural import procedural_episodes  # noqa: E402
 
 TIMING = ("seconds", "instructions_per_s")
 ARGV = ["--scenes", "proc-0", "proc-1", "--per-scene", "2"]
