@@ -229,7 +229,12 @@ def _house(seconds: float, seed: int, physical: bool) -> dict:
 
 
 def _stairs(data: Path, scan_id: str, edges: int, seed: int) -> dict:
-    """The GO1 walking the climbing edges (|Δfloor| > 0.3 m) of a real building's graph proxy."""
+    """The GO1 walking the climbing edges (|Δfloor| > 0.3 m) of a real building's graph proxy.
+
+    Each row says how the proxy serves the edge: ``straight``, ``by route`` (walked through
+    the route's viewpoints) or the fault that leaves it unwalkable.
+    """
+    from havln_mj.scene.proxy.build import build_proxy
     from havln_mj.scene.scan import load_scan
     from havln_mj.sim.crowd import NO_CROWD
     from havln_mj.sim.legged import LeggedAgent, LeggedOptions, LeggedWorld
@@ -241,6 +246,7 @@ def _stairs(data: Path, scan_id: str, edges: int, seed: int) -> dict:
     scan = load_scan(scan_id, connectivity_dir=conn)
     g = scan.graph
     climbs = [(a, b) for a, b, _ in g.edges() if abs(g.floor_z(a) - g.floor_z(b)) > 0.3]
+    proxy = build_proxy(g) if scan.kind == "graph proxy" else None
     rng = np.random.default_rng(seed)
     picks = [climbs[int(k)] for k in rng.permutation(len(climbs))[:edges]]
     world = LeggedWorld(scan, WorldOptions(collision="boxes"), NO_CROWD, LeggedOptions())
@@ -252,8 +258,14 @@ def _stairs(data: Path, scan_id: str, edges: int, seed: int) -> dict:
             target = np.append(g.position(dst)[:2], g.floor_z(dst))
             out = agent.go_to(target, None, 0.0)
             end = agent.position()
+            drawn = "mesh"
+            if proxy is not None and (a, b) in proxy.routes:
+                drawn = "by route"
+            elif proxy is not None:
+                drawn = proxy.faults.get((a, b), "straight")
             rows.append(
                 {
+                    "proxy_edge": drawn,
                     "rise_m": round(g.floor_z(dst) - g.floor_z(src), 2),
                     "run_m": round(float(np.hypot(*(target[:2] - g.position(src)[:2]))), 2),
                     "end_error_m": round(float(np.hypot(*(end[:2] - target[:2]))), 3),

@@ -29,8 +29,9 @@ from havln_mj.scene.matterport.layout import (
 from havln_mj.scene.mesh import boxes_to_parts, load_mesh_parts, parts_to_trimesh, write_glb
 from havln_mj.scene.navgraph import NavGraph, level_groups
 from havln_mj.scene.proxy.build import ProxyParams, build_proxy
+from havln_mj.scene.proxy.routes import write_routes
 from havln_mj.scene.regions import Level, Region, Regions
-from havln_mj.scene.scanfolder import BOXES, CONNECTIVITY, META, REGIONS
+from havln_mj.scene.scanfolder import BOXES, CONNECTIVITY, META, REGIONS, ROUTES
 
 CONNECTIVITY_ENV = "HAVLN_CONNECTIVITY_DIR"
 CONNECTIVITY_HOW_TO = (
@@ -39,7 +40,7 @@ CONNECTIVITY_HOW_TO = (
     f"set {CONNECTIVITY_ENV}"
 )
 # Bump when proxies or converted scans change: cached ones are rebuilt.
-REAL_SCAN_VERSION = 1
+REAL_SCAN_VERSION = 2
 
 
 def resolve_connectivity_dir(arg: Path | str | None) -> Path | None:
@@ -120,9 +121,11 @@ def build_real_scan(
             proxy = build_proxy(graph, ProxyParams())
             write_glb(boxes_to_parts(proxy.boxes), staging / "mesh.glb")
             proxy.boxes.write(staging / BOXES)
+            write_routes(staging / ROUTES, proxy.routes)
             meta.update(
                 kind="graph proxy",
                 unwalkable_edges=len(proxy.unwalkable),
+                edges_by_route=len(proxy.routes),
                 mesh_search=str(mesh_error).split(". ")[0] if mesh_error else None,
             )
         regions.write(staging / REGIONS)

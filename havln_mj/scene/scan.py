@@ -19,8 +19,17 @@ from havln_mj.scene.boxes import BoxSet
 from havln_mj.scene.ids import parse_scene_id
 from havln_mj.scene.mesh import MeshPart, load_mesh_parts, parts_to_trimesh
 from havln_mj.scene.navgraph import NavGraph, level_groups
+from havln_mj.scene.proxy.routes import read_routes
 from havln_mj.scene.regions import Regions
-from havln_mj.scene.scanfolder import BOXES, CONNECTIVITY, MESH_GLB, MESH_OBJ, META, REGIONS
+from havln_mj.scene.scanfolder import (
+    BOXES,
+    CONNECTIVITY,
+    MESH_GLB,
+    MESH_OBJ,
+    META,
+    REGIONS,
+    ROUTES,
+)
 
 log = logging.getLogger(__name__)
 
@@ -39,6 +48,8 @@ class Scan:
         boxes: Exact box geometry when the folder has ``boxes.json``, else None (the world
             builder then decomposes the mesh with CoACD).
         meta: The folder's ``scan.json`` content.
+        routes: Edges a body walks by a route through other viewpoints rather than straight
+            (``routes.json``; graph proxies), as ``(a, b) -> (a, ..., b)``.
     """
 
     scene_id: str
@@ -49,6 +60,15 @@ class Scan:
     regions: Regions | None
     boxes: BoxSet | None
     meta: dict[str, Any] = field(default_factory=dict)
+    routes: dict[tuple[str, str], tuple[str, ...]] = field(default_factory=dict)
+
+    def route(self, a: str, b: str) -> tuple[str, ...] | None:
+        """The viewpoints a body walks through from ``a`` to ``b``, or None when straight."""
+        if (a, b) in self.routes:
+            return self.routes[(a, b)]
+        if (b, a) in self.routes:
+            return self.routes[(b, a)][::-1]
+        return None
 
     @cached_property
     def mesh_parts(self) -> list[MeshPart]:
@@ -119,6 +139,7 @@ def read_scan_folder(folder: Path, scene_id: str | None = None) -> Scan:
     graph = NavGraph.from_file(folder / CONNECTIVITY)
     regions = Regions.read(folder / REGIONS) if (folder / REGIONS).is_file() else None
     boxes = BoxSet.read(folder / BOXES) if (folder / BOXES).is_file() else None
+    routes = read_routes(folder / ROUTES)
     return Scan(
         scene_id=scene_id or str(meta.get("scene_id", folder.name)),
         kind=str(meta.get("kind", "folder")),
@@ -128,6 +149,7 @@ def read_scan_folder(folder: Path, scene_id: str | None = None) -> Scan:
         regions=regions,
         boxes=boxes,
         meta=meta,
+        routes=routes,
     )
 
 

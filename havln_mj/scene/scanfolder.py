@@ -4,5 +4,6 @@ MESH_GLB = "mesh.glb"  # or MESH_OBJ (+ .mtl and textures)
 MESH_OBJ = "mesh.obj"
 CONNECTIVITY = "connectivity.json"  # exact Matterport3DSimulator schema
 REGIONS = "regions.json"  # levels, regions, objects, viewpoint -> region
-BOXES = "boxes.json"  # optional exact box geometry (procedural houses)
+BOXES = "boxes.json"  # optional exact box geometry (procedural houses, graph proxies)
+ROUTES = "routes.json"  # optional: edges walked by a route, not straight (graph proxies)
 META = "scan.json"  # scene id, kind, provenance

@@ -6,7 +6,9 @@ GO1, compiled once; each batch element is a :class:`LeggedAgent` with its own ``
 * **Graph actions** (``makeAction`` to a navigable viewpoint) become turn-then-walk primitive
   sequences closed on the robot's state estimate: face the target, walk the distance, and
   correct once more when the robot ends more than :attr:`LeggedOptions.retry_m` away; then
-  turn to the heading MatterSim would have (the old heading plus the requested change).
+  turn to the heading MatterSim would have (the old heading plus the requested change). An
+  edge the scan walks by a route (a graph proxy's line of sight across a stairwell, say:
+  :attr:`~havln_mj.scene.scan.Scan.routes`) is walked through the route's viewpoints.
 * **Continuous actions** (the real-robot setting): forward ``forward_m``, turn
   ``±turn_rad``, stop.
 * **Time**: every action advances the element's clock by the physics time it took.
@@ -39,6 +41,7 @@ from havln_mj.sim.rendering import View, ViewSettings, shoot
 from havln_mj.sim.world import WorldOptions, build_world, world_spec
 
 PREFIX = "go1/"
+_AT_VIEWPOINT = 0.5  # metres: a robot this close to a viewpoint stands at it (for routes)
 
 
 @dataclass(frozen=True)
@@ -116,6 +119,32 @@ class LeggedWorld:
         self.robot_geoms = np.flatnonzero(np.isin(self.model.geom_bodyid, robot_bodies))
         self.camera = self.handles.camera
         self._grids: list[tuple[float, NavGrid]] | None = None
+        g = scan.graph
+        floors = [[*g.position(v)[:2], g.floor_z(v)] for v in g.nodes]
+        self._floors = np.array(floors, dtype=float).reshape(-1, 3)
+
+    def waypoints(self, start: np.ndarray, target: np.ndarray) -> list[np.ndarray]:
+        """Floor points a move from trunk position ``start`` to floor point ``target`` passes.
+
+        Empty unless the robot stands within ``_AT_VIEWPOINT`` of a viewpoint (horizontally,
+        on its floor) and ``target`` is the floor point of a viewpoint whose edge with it the
+        scan walks by a route; then the route's inner viewpoints, in order.
+        """
+        if not self.scan.routes:
+            return []
+        fl = self._floors
+        gap = np.hypot(*(fl[:, :2] - start[:2]).T)
+        above = start[2] - fl[:, 2]
+        here = np.flatnonzero((gap <= _AT_VIEWPOINT) & (above > 0.0) & (above < LEVEL_GAP))
+        there = np.flatnonzero(np.all(np.abs(fl - target) < 1e-6, axis=1))
+        if not len(here) or not len(there):
+            return []
+        nodes = self.scan.graph.nodes
+        route = self.scan.route(nodes[here[np.argmin(gap[here])]], nodes[there[0]])
+        if route is None:
+            return []
+        index = {v: k for k, v in enumerate(nodes)}
+        return [fl[index[v]] for v in route[1:-1]]
 
     def geodesic(self, start: np.ndarray, goal: np.ndarray) -> float:
         """Walking distance between two floor points on one level (``inf`` if none).
@@ -218,24 +247,27 @@ class LeggedAgent:
         """Walks to a floor point, then turns to ``final_heading``.
 
         Turn to face the point, walk the distance, and once more if still too far; None as
-        ``final_heading`` keeps the walking direction.
+        ``final_heading`` keeps the walking direction. When the scan walks this edge by a route
+        (see :meth:`LeggedWorld.waypoints`), each of its viewpoints is walked to in turn first.
         """
         retry = self.world.options.retry_m
+        legs = [*self.world.waypoints(self.position(), np.asarray(target, float)), target]
 
         def script(do) -> list[PrimitiveResult]:
             done = []
-            for _ in range(3):
-                p = self.body.pose()
-                here = np.array([p.x, p.y])
-                gap = float(np.linalg.norm(target[:2] - here))
-                if done and gap <= retry:
-                    break
-                if gap > 0.02:
-                    bearing = heading_to(np.array([p.x, p.y, 0.0]), target)
-                    done.append(do("turn", wrap_angle(bearing - p.heading)))
-                    done.append(do("forward", gap))
-                if self.body.fallen:
-                    return done
+            for point in legs:
+                for attempt in range(3):
+                    p = self.body.pose()
+                    here = np.array([p.x, p.y])
+                    gap = float(np.linalg.norm(point[:2] - here))
+                    if attempt and gap <= retry:
+                        break
+                    if gap > 0.02:
+                        bearing = heading_to(np.array([p.x, p.y, 0.0]), point)
+                        done.append(do("turn", wrap_angle(bearing - p.heading)))
+                        done.append(do("forward", gap))
+                    if self.body.fallen:
+                        return done
             if final_heading is not None:
                 turn = wrap_angle(final_heading - self.body.pose().heading)
                 if abs(turn) > math.radians(1.0):

@@ -174,6 +174,11 @@ def world_spec(scan: Scan, options: WorldOptions | None = None) -> tuple[mujoco.
     spec.modelname = safe_name(scan.scene_id)
     spec.compiler.degree = False
     spec.option.gravity = (0.0, 0.0, -9.81)
+    # MuJoCo's sleep feature treats the world body as asleep, so the poses of the building's
+    # thousands of static geoms are computed once instead of every step (a graph proxy has up
+    # to ~12k boxes: most of a step's time went there). Actuated trees (the GO1) never sleep;
+    # mocap bodies (people) move as before; a passive free body may sleep while at rest.
+    spec.option.enableflags |= mujoco.mjtEnableBit.mjENBL_SLEEP
     spec.visual.global_.offwidth = int(options.offscreen[0])
     spec.visual.global_.offheight = int(options.offscreen[1])
     spec.visual.headlight.ambient = (0.4, 0.4, 0.4)

@@ -1,18 +1,202 @@
-"""Graph proxies of the real navigation graphs."""
+"""Graph proxies: the walkability check, crossing edges and routes, and the real graphs."""
 
 from __future__ import annotations
+
+import itertools
 
 import numpy as np
 import pytest
 from scipy.ndimage import label
 
-from havln_mj.errors import InvalidArgumentError
+from havln_mj.errors import InvalidArgumentError, MalformedDataError
+from havln_mj.scene.boxes import BoxSet
+from havln_mj.scene.connectivity import parse_connectivity
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.proxy.build import ProxyParams, build_proxy, edge_walkability
 from havln_mj.scene.proxy.raster import cover_cells
+from havln_mj.scene.proxy.routes import crossings, read_routes, shortest_routes, write_routes
+from havln_mj.scene.proxy.walk import edge_grade, floor_point, path_fault
 
 # Small and large, single- and multi-storey, and scans whose graphs have several components.
 SAMPLE = ["17DRP5sb8fy", "gZ6f7yhEvPG", "pLe4wQe7qrG", "2azQ1b91cZZ", "JF19kD82Mey", "PuKPg4mmafe"]
+P = ProxyParams()
+
+
+def _graph(floors: dict[str, tuple[float, float, float]], edges: list[tuple[str, str]]):
+    """A graph of viewpoints at floor points (x, y, floor), cameras 1.5 m above."""
+    ids = list(floors)
+    flags = set(edges) | {(b, a) for a, b in edges}
+    data = [
+        {
+            "image_id": vp,
+            "pose": [1, 0, 0, x, 0, 1, 0, y, 0, 0, 1, f + 1.5, 0, 0, 0, 1],
+            "included": True,
+            "visible": [False] * len(ids),
+            "unobstructed": [(vp, other) in flags for other in ids],
+            "height": 1.5,
+        }
+        for vp, (x, y, f) in floors.items()
+    ]
+    return NavGraph(parse_connectivity(data, "toy_connectivity.json"))
+
+
+def _boxes(*spans: tuple[tuple[float, ...], tuple[float, ...]]) -> BoxSet:
+    lo = np.array([s[0] for s in spans], float)
+    hi = np.array([s[1] for s in spans], float)
+    return BoxSet(lo, hi, ("floor",) * len(lo), ("floor",) * len(lo), np.ones((len(lo), 4)))
+
+
+_SLAB = ((-1.0, -1.0, -0.1), (5.0, 1.0, 0.0))  # floor top at z = 0 from x = -1 to 5
+_LINE = np.array([[0.0, 0.0, 0.0], [4.0, 0.0, 0.0]])
+
+
+# ------------------------------------------------------------------ the walkability check
+
+
+def test_a_clear_floor_is_walkable():
+    assert path_fault(_LINE, _boxes(_SLAB), P) is None
+
+
+@pytest.mark.parametrize(
+    ("extra", "points", "cause"),
+    [
+        # A 0.25 m ledge across the path (on the floor slab) is a riser taller than `step`.
+        ([((2.0, -1.0, 0.0), (5.0, 1.0, 0.25))], np.array([[0.0, 0, 0], [4.0, 0, 0.25]]), "step"),
+        # A box in the body band beside the path (0.15 m off the centre line).
+        ([((1.9, 0.15, 0.0), (2.1, 0.5, 1.0))], _LINE, "blocked"),
+        # The far viewpoint's floor is 0.15 m above the floor drawn under it.
+        ([], np.array([[0.0, 0, 0], [4.0, 0, 0.15]]), "no_floor"),
+        # Nothing under the path halfway.
+        ([], np.array([[0.0, 0, 0], [7.0, 0, 0]]), "no_floor"),
+        # A straight edge climbing 1.2 m over 1 m: steeper than 45° whatever is drawn.
+        ([], np.array([[0.0, 0, 0], [1.0, 0, 1.2]]), "steep"),
+    ],
+)
+def test_the_check_names_the_fault(extra, points, cause):
+    assert path_fault(points, _boxes(_SLAB, *extra), P) == cause
+
+
+def test_low_sills_are_stepped_onto_and_overhead_slabs_passed_under():
+    sill = ((1.9, -1.0, 0.0), (2.1, 1.0, 0.15))
+    overhead = ((1.0, -1.0, 1.96), (3.0, 1.0, 2.05))  # above the band, even on the sill
+    assert path_fault(_LINE, _boxes(_SLAB, sill, overhead), P) is None
+    low_beam = ((1.0, -1.0, 1.7), (3.0, 1.0, 1.75))
+    assert path_fault(_LINE, _boxes(_SLAB, low_beam), P) == "blocked"
+
+
+def test_a_flight_steeper_than_the_grade_limit_is_steep_though_the_edge_is_not():
+    # The edge climbs 1.5 m over 4 m (a grade of 0.375), but the floor drawn under it stays
+    # level, then climbs it all in one metre of 0.15 m risers (each within `step`).
+    edge = np.array([[0.0, 0, 0], [4.0, 0, 1.5]])
+    slab = ((-1.0, -1.0, -0.1), (5.0, 1.0, 0.0))
+
+    def flight(start: float, tread: float, rise: float) -> list:
+        n = round(1.5 / rise)
+        return [((start + tread * k, -1, 0.0), (5.0, 1, rise * (k + 1))) for k in range(n)]
+
+    assert path_fault(edge, _boxes(slab, *flight(1.5, 0.1, 0.15)), P) == "steep"
+    assert path_fault(edge, _boxes(slab, *flight(0.5, 0.2, 0.1)), P) is None
+
+
+def test_a_route_is_checked_as_one_path():
+    corner = np.array([[0.0, 0, 0], [4.0, 0, 0], [4.0, 0.5, 0.0]])
+    assert path_fault(corner, _boxes(_SLAB), P) is None
+    assert path_fault(corner * [1, 1, 0] + [0, 0.6, 0], _boxes(_SLAB), P) == "no_floor"
+
+
+# ------------------------------------------------------------ crossings and routes, by hand
+
+
+def test_crossing_corridors_at_body_height_conflict_and_stacked_ones_do_not():
+    g = _graph(
+        {
+            "w": (-2.0, 0.0, 0.0),
+            "e": (2.0, 0.0, 0.0),
+            "s": (0.0, -3.0, 0.0),
+            "n": (0.0, 3.0, 1.6),  # crosses w-e 0.8 m up: in the body band
+            "s2": (0.5, -3.0, 2.4),
+            "n2": (0.5, 3.0, 2.4),  # crosses w-e 2.4 m up: a storey above
+            "w3": (-2.0, 0.3, 0.05),
+            "e3": (-0.5, 0.3, 0.05),  # beside w-e at the same height
+        },
+        [("w", "e"), ("s", "n"), ("s2", "n2"), ("w3", "e3")],
+    )
+    edges = [(a, b) for a, b, _ in g.edges()]
+    conflicts = crossings(g, edges, P)
+    we = next(e for e in edges if set(e) == {"w", "e"})
+    sn = next(e for e in edges if set(e) == {"s", "n"})
+    assert conflicts[we] == {sn} and conflicts[sn] == {we}
+    assert len(conflicts) == 2
+
+
+def test_shortest_routes_avoid_the_edge_itself_and_respect_the_ratio():
+    g = _graph({"a": (0.0, 0.0, 0.0), "b": (2.0, 0.0, 0.0), "c": (1.0, 0.5, 0.0)},
+               [("a", "b"), ("a", "c"), ("c", "b")])  # fmt: skip
+    edges = {frozenset(e[:2]): e[:2] for e in g.edges()}
+    ab, ac, cb = edges[frozenset("ab")], edges[frozenset("ac")], edges[frozenset("cb")]
+    routes = shortest_routes(g, [ab, ac, cb], [ab], ratio=1.5)
+    assert routes == {ab: (ab[0], "c", ab[1])}
+    assert shortest_routes(g, [ab, ac, cb], [ab], ratio=1.05) == {}  # the detour is 1.12×
+
+
+def test_a_steep_edge_is_left_undrawn_and_walked_by_its_route():
+    # b stands 1.6 m above a and 1 m beside it (a turning stair seen from its foot); the walk
+    # goes round by c and d.
+    floors = {"a": (0, 0, 0), "b": (1, 0, 1.6), "c": (-1, 4, 0.5), "d": (2, 4, 1.1)}
+    g = _graph(floors, [("a", "b"), ("a", "c"), ("c", "d"), ("d", "b")])
+    ab = next((a, b) for a, b, _ in g.edges() if {a, b} == {"a", "b"})
+    assert edge_grade(g, *ab) > P.max_grade
+    strict = build_proxy(g)
+    assert strict.faults == {ab: "steep"} and strict.unwalkable == [ab]
+    loose = build_proxy(g, ProxyParams(route_ratio=7.0))  # the detour is 6 times as long
+    assert loose.routes == {ab: ("a", "c", "d", "b")} and loose.unwalkable == []
+    route = np.array([floor_point(g, v) for v in loose.routes[ab]])
+    assert path_fault(route, loose.boxes, P) is None
+
+
+def test_routes_file_round_trip_and_checks(tmp_path):
+    routes = {("a", "b"): ("a", "c", "b"), ("d", "e"): ("d", "f", "g", "e")}
+    path = tmp_path / "routes.json"
+    write_routes(path, routes)
+    assert read_routes(path) == routes
+    assert read_routes(tmp_path / "absent.json") == {}
+    path.write_text('{"routes": [{"edge": ["a", "b"], "via": ["a", "b"]}]}')
+    with pytest.raises(MalformedDataError, match="a-b"):
+        read_routes(path)
+    path.write_text('{"routes": [{"edge": ["a"]}]}')
+    with pytest.raises(MalformedDataError, match="not a valid routes file"):
+        read_routes(path)
+
+
+def test_proxy_params_are_checked():
+    with pytest.raises(InvalidArgumentError, match=r"corridor_half_width=0\.1"):
+        ProxyParams(corridor_half_width=0.1)
+    with pytest.raises(InvalidArgumentError, match="cell=2"):
+        ProxyParams(cell=2)
+    with pytest.raises(InvalidArgumentError, match="max_grade=0"):
+        ProxyParams(max_grade=0)
+
+
+def test_cover_cells_covers_each_cell_once_with_its_key_and_only_spare_cells_besides():
+    rng = np.random.default_rng(3)
+    key = np.where(rng.random((40, 30)) < 0.6, rng.integers(0, 3, (40, 30)), -1)
+    key[:10] = 1  # a block that should merge into few rectangles
+    spare = (key < 0) & (rng.random(key.shape) < 0.5)
+    cover = np.zeros(key.shape, int)
+    for r0, r1, c0, c1, k in cover_cells(key, spare):
+        block = key[r0:r1, c0:c1]
+        assert np.all((block == k) | spare[r0:r1, c0:c1])
+        cover[r0:r1, c0:c1] += block == k
+    # Exactly once: a foot on a cell covered twice would touch two boxes.
+    assert np.all(cover[key >= 0] == 1)
+    assert len(cover_cells(np.zeros((10, 10), int), np.zeros((10, 10), bool))) == 1
+    # A disc on spare ground takes one box instead of one per row.
+    yy, xx = np.mgrid[:20, :20]
+    disc = np.where(np.hypot(yy - 9.5, xx - 9.5) < 9, 0, -1)
+    assert len(cover_cells(disc, disc < 0)) == 1
+
+
+# ------------------------------------------------------------------------ the real graphs
 
 
 @pytest.fixture(scope="module")
@@ -25,13 +209,25 @@ def proxies(shared_data):
 
 
 @pytest.mark.parametrize("scan", SAMPLE)
-def test_edges_are_walkable(proxies, scan):
+def test_edges_are_walkable_straight_or_by_route(proxies, scan):
     graph, proxy = proxies[scan]
-    assert proxy.unwalkable == [e for v in edge_walkability(graph, proxy.boxes).values() for e in v]
-    # Over all 90 graphs (benchmarks/bench_proxies.py) about 0.7 % of edges still fail, where
-    # edges cross or stack at different floor heights; the single-storey samples are clean.
-    assert len(proxy.unwalkable) <= 0.1 * graph.num_edges
-    if scan in ("17DRP5sb8fy", "gZ6f7yhEvPG", "pLe4wQe7qrG"):
+    checked = {e: cause for cause, es in edge_walkability(graph, proxy.boxes).items() for e in es}
+    assert proxy.faults == checked
+    straight = [(a, b) for a, b, _ in graph.edges() if (a, b) not in proxy.faults]
+    for (a, b), via in proxy.routes.items():
+        # Only edges that provably cannot be drawn straight are routed...
+        assert edge_grade(graph, a, b) > P.max_grade or (a, b) in proxy.crossing
+        # ...over edges walked straight, no longer than route_ratio times the edge...
+        links = {frozenset(link) for link in itertools.pairwise(via)}
+        assert links <= {frozenset(e) for e in straight}
+        length = sum(np.linalg.norm(graph.position(u) - graph.position(v)) for u, v in links)
+        assert length <= P.route_ratio * np.linalg.norm(graph.position(a) - graph.position(b))
+        # ...and the whole route passes the check.
+        assert path_fault(np.array([floor_point(graph, v) for v in via]), proxy.boxes, P) is None
+    assert proxy.unwalkable == [e for e in proxy.faults if e not in proxy.routes]
+    # Over all 90 graphs (benchmarks/bench_proxies.py) 0.6 % of edges are walkable neither
+    # way, a third of them steeper than 45°; the single-storey samples are clean.
+    if scan in ("17DRP5sb8fy", "gZ6f7yhEvPG", "pLe4wQe7qrG", "PuKPg4mmafe"):
         assert proxy.unwalkable == []
 
 
@@ -39,6 +235,13 @@ def test_few_edges_fail_over_the_sample(proxies):
     bad = sum(len(proxy.unwalkable) for _, proxy in proxies.values())
     edges = sum(graph.num_edges for graph, _ in proxies.values())
     assert bad <= 0.01 * edges, (bad, edges)
+
+
+@pytest.mark.parametrize("scan", SAMPLE)
+def test_every_box_is_solid_at_the_precision_of_boxes_json(proxies, scan):
+    _, proxy = proxies[scan]
+    size = np.round(proxy.boxes.hi, 4) - np.round(proxy.boxes.lo, 4)
+    assert size.min() >= 0.001  # MuJoCo rejects a box of zero size
 
 
 @pytest.mark.parametrize("scan", SAMPLE)
@@ -68,28 +271,3 @@ def test_disconnected_viewpoints_stay_disconnected(proxies, scan):
                 assert k == comp_of[vp], f"{vp} shares floor with component {k}"
     if scan != "2azQ1b91cZZ":
         assert len(comps) > 1
-
-
-def test_proxy_params_are_checked():
-    with pytest.raises(InvalidArgumentError, match=r"corridor_half_width=0\.1"):
-        ProxyParams(corridor_half_width=0.1)
-    with pytest.raises(InvalidArgumentError, match="cell=2"):
-        ProxyParams(cell=2)
-
-
-def test_cover_cells_covers_each_cell_with_its_key_and_only_spare_cells_besides():
-    rng = np.random.default_rng(3)
-    key = np.where(rng.random((40, 30)) < 0.6, rng.integers(0, 3, (40, 30)), -1)
-    key[:10] = 1  # a block that should merge into few rectangles
-    spare = (key < 0) & (rng.random(key.shape) < 0.5)
-    cover = np.zeros(key.shape, int)
-    for r0, r1, c0, c1, k in cover_cells(key, spare):
-        block = key[r0:r1, c0:c1]
-        assert np.all((block == k) | spare[r0:r1, c0:c1])
-        cover[r0:r1, c0:c1] += block == k
-    assert np.all(cover[key >= 0] >= 1)
-    assert len(cover_cells(np.zeros((10, 10), int), np.zeros((10, 10), bool))) == 1
-    # A disc on spare ground takes one box instead of one per row.
-    yy, xx = np.mgrid[:20, :20]
-    disc = np.where(np.hypot(yy - 9.5, xx - 9.5) < 9, 0, -1)
-    assert len(cover_cells(disc, disc < 0)) == 1

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 
 import numpy as np
@@ -95,6 +96,18 @@ def test_graph_proxy_when_only_the_graph_is_there(tmp_path, shared_data):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["scene_kind"] == "graph proxy" and "graph proxy" in summary["description"]
     assert (out / "egocentric.mp4").stat().st_size > 0 and (out / "topdown.png").is_file()
+
+
+def test_a_proxy_stores_the_routes_of_edges_it_cannot_draw_straight(shared_data):
+    # 5LpN3gDmAk7: one edge crosses another's corridor at body height and is walked round.
+    scan = load_scan("5LpN3gDmAk7", connectivity_dir=shared_data / "mp3d_connectivity")
+    assert scan.meta["unwalkable_edges"] == 0 and scan.meta["edges_by_route"] == 1
+    assert json.loads((scan.folder / "routes.json").read_text())["routes"]
+    (((a, b), via),) = scan.routes.items()
+    assert via[0] == a and via[-1] == b and len(via) >= 3
+    assert scan.route(b, a) == via[::-1] and scan.route(a, via[1]) is None
+    for u, v in itertools.pairwise(via):
+        assert v in scan.graph.neighbors(u)
 
 
 def test_proxy_is_replaced_once_the_mesh_appears(tmp_path):

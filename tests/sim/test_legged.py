@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import mujoco
@@ -15,7 +16,9 @@ from havln_mj.humans.body import BodyShape
 from havln_mj.humans.crowd import Crowd, Person
 from havln_mj.humans.motion import idle
 from havln_mj.scene.scan import load_scan
-from havln_mj.sim.legged import LeggedOptions
+from havln_mj.sim.crowd import NO_CROWD
+from havln_mj.sim.legged import LeggedAgent, LeggedOptions, LeggedWorld
+from havln_mj.sim.world import WorldOptions
 
 SCAN = "proc-0"
 
@@ -152,3 +155,44 @@ def test_geodesic_distance_from_the_robot(graph, edge):
     sim.makeRobotAction(["forward"])
     (d1,) = sim.get_geodesic_distance([b])
     assert d1 == pytest.approx(d0 - 0.5, abs=0.1)  # the robot walked half a metre toward b
+
+
+def test_an_edge_walked_by_a_route_passes_its_viewpoints(graph):
+    # Give one proc-0 edge a made-up route through a common neighbour, as graph proxies do
+    # for a line of sight across a stairwell: the GO1 walks through that neighbour.
+    a, b, c = next(
+        (u, v, w)
+        for u, v, _ in graph.edges()
+        for w in graph.neighbors(u)
+        if w in graph.neighbors(v) and w not in (u, v)
+    )
+    scan = dataclasses.replace(load_scan(SCAN), routes={(a, b): (a, c, b)})
+    world = LeggedWorld(scan, WorldOptions(collision="boxes"), NO_CROWD, LeggedOptions())
+    floor = {v: np.append(graph.position(v)[:2], graph.floor_z(v)) for v in (a, b, c)}
+    agent = LeggedAgent(world)
+    agent.place(graph.position(a), graph.floor_z(a), 0.0, 0.0)
+    np.testing.assert_array_equal(world.waypoints(agent.position(), floor[b]), [floor[c]])
+    assert world.waypoints(agent.position(), floor[c]) == []  # a-c is walked straight
+    out = agent.go_to(floor[b], None, 0.0)
+    assert not out.fell
+    track = out.track[:, 1:3]
+    assert np.hypot(*(track - floor[c][:2]).T).min() < 0.3
+    assert np.hypot(*(agent.position()[:2] - floor[b][:2])) < 0.3
+    # From b the route runs backwards.
+    np.testing.assert_array_equal(world.waypoints(agent.position(), floor[a]), [floor[c]])
+
+
+def test_the_building_sleeps_and_the_robot_never_does(edge):
+    # MuJoCo's sleep feature is on so the building's static geoms are posed once, not every
+    # step; the actuated GO1 must stay awake even while it stands still.
+    a, _, h = edge
+    sim = _sim()
+    sim.newEpisode([SCAN], [a], [h], [0.0])
+    legged = sim._agents[0].legged
+    assert legged.world.model.opt.enableflags & mujoco.mjtEnableBit.mjENBL_SLEEP
+    z0 = legged.position()[2]
+    legged.run([("stand", 3.0)], 0.0)
+    assert np.all(legged.data.tree_asleep < 0)  # negative: awake
+    assert legged.position()[2] == pytest.approx(z0, abs=0.03)
+    sim.makeRobotAction(["forward"])
+    assert not sim.getState()[0].fell

@@ -57,9 +57,9 @@ def corridor(
 def cover_cells(key: np.ndarray, spare: np.ndarray) -> list[tuple[int, int, int, int, int]]:
     """Greedy rectangle cover of the cells where ``key >= 0``, each rectangle of one key.
 
-    A rectangle may also take ``spare`` cells (where any box may stand) and cells of its own
-    key that another rectangle already covers, so rectangles overlap and grow past ragged
-    outlines instead of following them.
+    A rectangle may also take ``spare`` cells (where any box may stand), so rectangles grow
+    past ragged outlines instead of following them. They may overlap on spare cells but never
+    on a keyed cell (a foot standing there would touch every box covering it).
 
     Returns:
         (row0, row1, col0, col1, key) rectangles, end-exclusive.
@@ -70,7 +70,8 @@ def cover_cells(key: np.ndarray, spare: np.ndarray) -> list[tuple[int, int, int,
         rows, cols = np.nonzero(need)
         r0, r1, c0, c1 = rows.min(), rows.max() + 1, cols.min(), cols.max() + 1
         need = need[r0:r1, c0:c1].copy()
-        allow = need | spare[r0:r1, c0:c1]
+        spare_k = spare[r0:r1, c0:c1]
+        allow = need | spare_k
         h, w = need.shape
         for r in range(h):
             while True:
@@ -97,6 +98,7 @@ def cover_cells(key: np.ndarray, spare: np.ndarray) -> list[tuple[int, int, int,
                         best = (gain, a, b, e)
                 _, a, b, e = best
                 need[r:b, a:e] = False
+                allow[r:b, a:e] = spare_k[r:b, a:e]
                 rects.append((int(r0 + r), int(r0 + b), int(c0 + a), int(c0 + e), int(k)))
     return rects
 

@@ -1,0 +1,129 @@
+"""Boxes of a graph proxy's layers: floors and stairs in cells, and walls.
+
+Each layer's free cells become floor boxes at their blended height, rounded to 2 cm: a stair
+is a rough ramp at its edge's grade whose ledges the GO1's blind trot steps over (at 5 cm, one
+graph action in ten tripped it on flat floors alone). The cells around a layer's free cells
+become walls, except where another layer needs that space to walk.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.ndimage import binary_dilation
+
+from havln_mj.scene.boxes import BoxSet
+from havln_mj.scene.proxy.layers import Layer
+from havln_mj.scene.proxy.params import ProxyParams
+from havln_mj.scene.proxy.raster import Grid, cover_cells
+
+FLOOR_RGBA = (0.62, 0.55, 0.45, 1.0)
+STAIR_RGBA = (0.50, 0.42, 0.34, 1.0)
+WALL_RGBA = (0.86, 0.85, 0.80, 1.0)
+_EIGHT = np.ones((3, 3), dtype=bool)
+_NEAR = 4  # cells: within this of another layer's floor, boxes keep to their own cells
+_Q = 0.02  # floor height quantum
+_WALL_Q = 0.1  # wall top quantum under another layer's floor
+
+
+def layer_boxes(layers: list[Layer], grid: Grid, p: ProxyParams) -> BoxSet:
+    """Floor, stair and wall boxes of the layers.
+
+    Boxes may reach over a layer's walls and past them where no other layer walks near:
+    nothing stands there, and boxes that run on there instead of tracing the ragged outlines
+    of discs and corridors are fewer. Floor cells of one height share boxes; within a layer
+    no two floor boxes cover the same free cell (each would be one more contact to solve).
+    """
+    sets: list[BoxSet] = []
+    frees = [layer.free for layer in layers]
+    for k, layer in enumerate(layers):
+        free, height = frees[k], layer.height
+        others = np.zeros(free.shape, bool)
+        for j, other in enumerate(frees):
+            if j != k:
+                others |= other
+        near_other = binary_dilation(others, _EIGHT, iterations=_NEAR)
+        nmin, nmax = _neighbour_extremes(height)
+        wall = binary_dilation(free, _EIGHT) & ~free
+        z0 = np.floor((nmin - p.slab) / _Q) * _Q
+        z1 = np.ceil((nmax + p.wall_height) / 0.5) * 0.5  # wall tops need no precision
+        for j, other in enumerate(layers):
+            if j != k:
+                # A wall stops under a floor of another layer above its foot; where another
+                # layer walks lower down, its body band must stay clear of the wall.
+                with np.errstate(invalid="ignore"):
+                    above = frees[j] & (other.height > z0)
+                    under = np.floor((other.height - p.slab) / _WALL_Q) * _WALL_Q
+                    z1 = np.where(above, np.minimum(z1, under), z1)
+                    blocks = (z0 < other.height + p.body_z[1]) & (z1 > other.height + p.body_z[0])
+                wall &= ~(frees[j] & blocks) & (z1 > z0 + _Q / 2)
+        # Cells where a box may stand although none is needed: the layer's walls and what
+        # lies beyond them, unless another layer walks near.
+        spare = ~free & ~near_other
+        top = np.round(np.nan_to_num(height) / _Q) * _Q
+        lo, hi, rects = _cell_boxes(grid, free, top - p.slab, top, spare)
+        # A box is stairs where most of its cells are.
+        stairs = _rect_sums(free & layer.stair, rects) * 2 > _rect_sums(free, rects)
+        sets.append(_set(lo[~stairs], hi[~stairs], "floor", "floor", FLOOR_RGBA))
+        sets.append(_set(lo[stairs], hi[stairs], "floor", "stairs", STAIR_RGBA))
+        sets.append(_set(*_cell_boxes(grid, wall, z0, z1, spare)[:2], "wall", "wall", WALL_RGBA))
+    return BoxSet(
+        np.concatenate([b.lo for b in sets]).reshape(-1, 3),
+        np.concatenate([b.hi for b in sets]).reshape(-1, 3),
+        tuple(k for b in sets for k in b.kind),
+        tuple(m for b in sets for m in b.material),
+        np.concatenate([b.rgba for b in sets]).reshape(-1, 4),
+    )
+
+
+def _set(lo: np.ndarray, hi: np.ndarray, kind: str, material: str, rgba: tuple) -> BoxSet:
+    return BoxSet(lo, hi, (kind,) * len(lo), (material,) * len(lo), np.tile(rgba, (len(lo), 1)))
+
+
+def _neighbour_extremes(height: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Min and max floor height over each cell's 8 neighbours (nan where none is free)."""
+    pad = np.pad(height, 1, constant_values=np.nan)
+    h, w = height.shape
+    stack = np.stack(
+        [
+            pad[1 + dr : 1 + dr + h, 1 + dc : 1 + dc + w]
+            for dr in (-1, 0, 1)
+            for dc in (-1, 0, 1)
+            if dr or dc
+        ]
+    )
+    none = np.isnan(stack).all(axis=0)
+    filled = np.where(np.isnan(stack), np.inf, stack)
+    nmin = np.where(none, np.nan, filled.min(axis=0))
+    nmax = np.where(none, np.nan, np.where(np.isnan(stack), -np.inf, stack).max(axis=0))
+    return nmin, nmax
+
+
+def _cell_boxes(
+    grid: Grid, mask: np.ndarray, z0: np.ndarray, z1: np.ndarray, spare: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Boxes covering the cells of ``mask``, cell (r, c) spanning ``z0[r, c]..z1[r, c]``.
+
+    Cells with equal spans share boxes, which may also stand on ``spare`` cells.
+
+    Returns:
+        lo, hi and the (row0, row1, col0, col1) cell rectangle of each box.
+    """
+    spans, inverse = np.unique(np.stack([z0[mask], z1[mask]], axis=1), axis=0, return_inverse=True)
+    key = np.full(mask.shape, -1, dtype=np.int64)
+    key[mask] = inverse.ravel()
+    rects = np.array(cover_cells(key, spare), dtype=float).reshape(-1, 5)
+    s = grid.cell
+    lo = np.column_stack(
+        [grid.x0 + rects[:, 2] * s, grid.y0 + rects[:, 0] * s, spans[rects[:, 4].astype(int), 0]]
+    )
+    hi = np.column_stack(
+        [grid.x0 + rects[:, 3] * s, grid.y0 + rects[:, 1] * s, spans[rects[:, 4].astype(int), 1]]
+    )
+    return lo, hi, rects[:, :4].astype(int)
+
+
+def _rect_sums(mask: np.ndarray, rects: np.ndarray) -> np.ndarray:
+    """Number of ``mask`` cells in each (row0, row1, col0, col1) rectangle."""
+    c = np.pad(np.cumsum(np.cumsum(mask, axis=0), axis=1), ((1, 0), (1, 0)))
+    r0, r1, c0, c1 = rects.T
+    return c[r1, c1] - c[r0, c1] - c[r1, c0] + c[r0, c0]
