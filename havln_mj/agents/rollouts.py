@@ -24,7 +24,6 @@ from havln_mj.agents.demos import N_ACTIONS, Demo
 from havln_mj.agents.features import FeatureStore
 from havln_mj.agents.observations import action_mask, observe
 from havln_mj.errors import InvalidArgumentError
-from havln_mj.scene.navgraph import NavGraph
 from havln_mj.sim.egocentric import EgoAction
 from havln_mj.sim.simulator import Simulator
 from havln_mj.tasks.datasets import Instruction
@@ -112,7 +111,9 @@ class EgoRollouts:
         self.instructions: list[Instruction] = []
         self.done = np.ones(0, bool)
         self.steps = np.zeros(0, int)
-        self._experts: list[HumanAwareExpert] = []
+        # One teacher for every element: its egocentric route tables are per scan and goal,
+        # so they are shared by the whole batch and kept across episodes.
+        self._expert = HumanAwareExpert(mode="local", action_space="ego")
         self._contexts: list[ExpertContext] = []
         self._humans: list[np.ndarray] | None = None
         self._distance = np.zeros(0)
@@ -122,9 +123,6 @@ class EgoRollouts:
         if self._humans is None:
             self._humans = self.sim.getHumanPositions()
         return self._humans
-
-    def _graph(self, scan: str) -> NavGraph:
-        return self.sim.graph(scan)
 
     def start(self, instructions: Sequence[Instruction]) -> None:
         """Starts one episode per instruction (at most the batch size).
@@ -149,14 +147,11 @@ class EgoRollouts:
         self.steps = np.zeros(self.batch_size, int)
         self._humans = None
         self._contexts = [
-            ExpertContext(_ElementView(self, i), e, self._graph(e.scan))
+            ExpertContext(_ElementView(self, i), e, self.sim.graph(e.scan))
             for i, e in enumerate(episodes)
         ]
-        self._experts = []
         for ctx in self._contexts:
-            expert = HumanAwareExpert(mode="local", action_space="ego")
-            expert.reset(ctx)
-            self._experts.append(expert)
+            self._expert.reset(ctx)
         states = self.sim.getState()
         self._distance = np.array(
             [
@@ -181,12 +176,10 @@ class EgoRollouts:
         """``(B,)`` the human-aware egocentric expert's action per element (STOP when done)."""
         states = self.sim.getState()
         out = np.zeros(self.batch_size, np.int64)
-        for i, (expert, ctx, state) in enumerate(
-            zip(self._experts, self._contexts, states, strict=True)
-        ):
+        for i, (ctx, state) in enumerate(zip(self._contexts, states, strict=True)):
             if not self.done[i]:
                 ctx.step = int(self.steps[i])
-                out[i] = int(expert.act(ctx, state))
+                out[i] = int(self._expert.act(ctx, state))
         return out
 
     def step(self, actions: Sequence[int] | np.ndarray) -> StepResult:
