@@ -37,6 +37,7 @@ def build_one(
         "viewpoints": scan.graph.num_nodes,
         "collision": world.collision,
         "collision_geoms": world.n_collision_geoms,
+        "edges_by_route": len(scan.routes),
         "unwalkable_edges": scan.meta.get("unwalkable_edges"),
         "seconds": round(time.perf_counter() - t0, 2),
     }
@@ -56,6 +57,19 @@ def _scene_ids(args: argparse.Namespace) -> list[str]:
     return ids
 
 
+def _summary(row: dict) -> str:
+    """One built scene's line: kind, size, collision geometry, how its edges are walked."""
+    geoms = f"{row['collision_geoms']} {row['collision']} collision geoms"
+    routes = row["edges_by_route"]
+    walks = f"{routes} edge{'' if routes == 1 else 's'} walked by route"
+    if row["unwalkable_edges"] is not None:
+        walks += f", {row['unwalkable_edges']} unwalkable"
+    return (
+        f"{row['scene']}: {row['kind']}, {row['viewpoints']} viewpoints, {geoms}, {walks}, "
+        f"{row['seconds']} s"
+    )
+
+
 def scenes_build(args: argparse.Namespace) -> int:
     """Builds the scenes in parallel with a progress bar; prints one line per scene."""
     ids = _scene_ids(args)
@@ -70,11 +84,7 @@ def scenes_build(args: argparse.Namespace) -> int:
                 scene = futures[future]
                 try:
                     row = future.result()
-                    geoms = f"{row['collision_geoms']} {row['collision']} collision geoms"
-                    tqdm.write(
-                        f"{row['scene']}: {row['kind']}, {row['viewpoints']} viewpoints, "
-                        f"{geoms}, {row['seconds']} s"
-                    )
+                    tqdm.write(_summary(row))
                 except HavlnError as exc:
                     failures += 1
                     tqdm.write(f"{scene}: FAILED: {exc}")

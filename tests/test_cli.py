@@ -14,9 +14,20 @@ def test_scenes_build_prebuilds_and_reports_failures(capsys):
     assert (scans_dir() / "proc-32" / "mesh.glb").is_file()
     out = capsys.readouterr().out
     assert "built 2 of 2 scenes" in out
+    assert "proc-31: procedural" in out and "0 edges walked by route" in out
     assert main(["scenes", "build", "proc-31", "Abcdefghijk", "--workers", "1"]) == 1
     assert "Abcdefghijk: FAILED" in capsys.readouterr().out
     assert main(["scenes", "build"]) == 2
+
+
+def test_scenes_build_says_how_many_edges_a_proxy_walks_by_route(shared_data, capsys):
+    # 5LpN3gDmAk7's proxy walks one edge round the corridor it crosses (see test_realscan).
+    conn = str(shared_data / "mp3d_connectivity")
+    argv = ["scenes", "build", "5LpN3gDmAk7", "--connectivity-dir", conn, "--workers", "1"]
+    assert main([*argv, "--collision", "boxes"]) == 0
+    out = capsys.readouterr().out
+    assert "5LpN3gDmAk7: graph proxy" in out
+    assert "1 edge walked by route, 0 unwalkable" in out
 
 
 def test_dataset_build_writes_a_split(tmp_path, capsys):

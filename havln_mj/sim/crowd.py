@@ -8,14 +8,17 @@ people uses :data:`NO_CROWD`.
 Collision (the HA-VLN signal): the agent is within ``distance`` (default 1 m) of a person,
 measured horizontally from the agent's base to the person's pelvis, at any time during an
 action. Actions are sampled at :data:`SAMPLE_HZ` or faster, both ends included, so a person
-passing through the agent's path mid-action is caught. Only people whose whole pelvis track
-(:meth:`Crowd.footprint`) comes within :data:`NEAR_M` of the action's segment are sampled;
-the smallest distance reported is exact below ``NEAR_M`` and ``inf`` above.
+passing through the agent's path mid-action is caught. An action's move is a straight segment,
+or a polyline where the edge is walked by a route (graph proxies). Only people whose whole
+pelvis track (:meth:`Crowd.footprint`) comes within :data:`NEAR_M` of the action's path are
+sampled; the smallest distance reported is exact below ``NEAR_M`` and ``inf`` above.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -120,40 +123,56 @@ NO_PROXIMITY = Proximity(False, (), math.inf)
 
 
 def action_samples(
-    start: np.ndarray, end: np.ndarray, t0: float, move_s: float, total_s: float
+    path: np.ndarray, t0: float, move_s: float, total_s: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Times and agent positions along an action: a straight move, then turning in place.
+    """Times and agent positions along an action: a move, then turning in place.
+
+    Args:
+        path: ``(K, 3)`` points, K ≥ 2: the move runs along this polyline (a straight move is
+            its two ends) at constant speed.
+        t0: Simulated time at the action's start.
+        move_s: How long the move lasts.
+        total_s: How long the action lasts (the turn follows the move).
 
     Returns:
         ``(times (n,), positions (n, 3))`` at :data:`SAMPLE_HZ` or faster, both ends included.
     """
+    path = np.asarray(path, float)
     n = max(2, math.ceil(total_s * SAMPLE_HZ) + 1)
     times = np.arange(n) * (total_s / (n - 1))
     frac = np.clip(times / move_s, 0.0, 1.0) if move_s > 0 else np.ones(n)
-    positions = start + frac[:, None] * (np.asarray(end) - np.asarray(start))
+    if len(path) == 2:
+        positions = path[0] + frac[:, None] * (path[1] - path[0])
+    else:
+        run = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
+        at = frac * run[-1]
+        positions = np.column_stack([np.interp(at, run, path[:, i]) for i in range(3)])
     return t0 + times, positions
 
 
-def _near(crowd: Crowd, start: np.ndarray, end: np.ndarray, reach: float) -> list[int]:
-    """Indices of people whose pelvis track comes within ``reach`` of the segment."""
+def _near(crowd: Crowd, path: np.ndarray, reach: float) -> list[int]:
+    """Indices of people whose pelvis track comes within ``reach`` of the polyline ``path``."""
     centres, radii = crowd.footprint()
-    ax, ay, bx, by = float(start[0]), float(start[1]), float(end[0]), float(end[1])
-    dx, dy = bx - ax, by - ay
-    length2 = dx * dx + dy * dy
+    legs = [
+        (float(a[0]), float(a[1]), float(b[0]) - float(a[0]), float(b[1]) - float(a[1]))
+        for a, b in itertools.pairwise(path)
+    ]
     out = []
     # Plain floats: a handful of people is faster this way than through numpy.
     for k, ((cx, cy), r) in enumerate(zip(centres.tolist(), radii.tolist(), strict=True)):
-        t = ((cx - ax) * dx + (cy - ay) * dy) / length2 if length2 > 0 else 0.0
-        t = min(max(t, 0.0), 1.0)
-        if math.hypot(cx - ax - t * dx, cy - ay - t * dy) - r <= reach:
-            out.append(k)
+        for ax, ay, dx, dy in legs:
+            length2 = dx * dx + dy * dy
+            t = ((cx - ax) * dx + (cy - ay) * dy) / length2 if length2 > 0 else 0.0
+            t = min(max(t, 0.0), 1.0)
+            if math.hypot(cx - ax - t * dx, cy - ay - t * dy) - r <= reach:
+                out.append(k)
+                break
     return out
 
 
 def proximity(
     crowd: Crowd,
-    start: np.ndarray,
-    end: np.ndarray,
+    path: np.ndarray | Sequence[Sequence[float]],
     t0: float,
     move_s: float,
     total_s: float,
@@ -161,16 +180,22 @@ def proximity(
 ) -> Proximity:
     """The collision signal of an action, people far from it left out.
 
-    The action moves from ``start`` to ``end`` in ``move_s`` seconds, then turns in place until
-    ``total_s``; it starts at simulated time ``t0``.
+    Args:
+        crowd: The people.
+        path: ``(K, 3)`` points, K ≥ 2: the action moves along this polyline from its first
+            point to its last (a straight move is its two ends) in ``move_s`` seconds, then
+            turns in place until ``total_s``.
+        t0: Simulated time at the action's start.
+        move_s: How long the move lasts.
+        total_s: How long the action lasts.
+        distance: Collision threshold (metres, horizontal).
     """
     if len(crowd) == 0:
         return NO_PROXIMITY
-    near = _near(crowd, start, end, max(NEAR_M, distance))
+    near = _near(crowd, path, max(NEAR_M, distance))
     if not near:
         return NO_PROXIMITY
-    start, end = np.asarray(start, float), np.asarray(end, float)
-    times, positions = action_samples(start, end, t0, move_s, total_s)
+    times, positions = action_samples(path, t0, move_s, total_s)
     return track_proximity(crowd, times, positions, distance, near)
 
 

@@ -5,7 +5,9 @@ With rendering off only navigation graphs are needed: a Matterport scan id reads
 proxy), so all 90 real graphs load in a second. A procedural id (``proc-<seed>``) or a scan
 folder goes through ``load_scan``. With rendering on, every scan is loaded with
 ``load_scan`` (the user's mesh, else a graph proxy) and its world is built once; worlds are
-kept in a least-recently-used cache of ``cache_size`` scans.
+kept in a least-recently-used cache of ``cache_size`` scans. A loaded scan's navigation table
+carries the edges its body walks by a route (graph proxies); a real scan id with rendering
+off has no proxy, and every edge is walked straight, as in MatterSim.
 """
 
 from __future__ import annotations
@@ -73,7 +75,12 @@ class SceneLibrary:
         """
         table = self._tables.get(scan_id)
         if table is None:
-            table = NavTable(scan_id, self._graph(scan_id))
+            graph = self._graph(scan_id)
+            # A loaded scan's body walks some edges by a route (graph proxies); a bare graph
+            # (a real scan id with rendering off) is MatterSim's: every edge straight.
+            scan = self._scans.get(scan_id)
+            routes = scan.routes if scan is not None and scan.graph is graph else None
+            table = NavTable(scan_id, graph, routes)
             self._tables[scan_id] = table
         return table
 

@@ -13,7 +13,11 @@ navigable-location rules, discretised views and exception types (see
 * **Clock**: every action advances the element's simulated time (``state.time``) by its
   duration: the move at ``speed`` m/s, then the turn at ``turn_rate`` rad/s (the larger of
   the heading and elevation change); an action that neither moves nor turns is a wait of
-  :data:`WAIT_S`. People are a function of that time.
+  :data:`WAIT_S`. People are a function of that time. In a graph proxy the point body walks
+  an edge stored with a route (a line of sight across a stairwell) along that route, through
+  its viewpoints: the move lasts the route's length at ``speed``, and the collision signal is
+  sampled along it (with rendering off a real scan id has no proxy, and every edge is
+  straight, as in MatterSim).
 * **Egocentric actions** (HA-VLN): ``makeEgoAction`` (see :mod:`havln_mj.sim.egocentric`).
 * **A legged robot**: ``Simulator(body="go1")`` executes every action with a physically
   simulated Unitree GO1 (see :mod:`havln_mj.sim.legged`): graph actions become turn-then-walk
@@ -657,16 +661,22 @@ class Simulator:
                 contact = outcome.contact or NO_PROXIMITY
                 a.contacts = outcome.human_contacts
             else:
-                move_s = target.rel_distance / self._speed
+                # An edge a graph proxy walks by a route takes the route, not the line.
+                route = a.table.path(here.viewpointId, target.viewpointId) if k else None
+                length = target.rel_distance if route is None else route[1]
+                move_s = length / self._speed
                 turn = max(abs(wrap_angle(heading - a.heading)), abs(elevation - a.elevation))
                 duration = move_s + turn / self._turn_rate
                 if duration == 0.0:
                     duration = wait_s
                 contact = NO_PROXIMITY
                 if len(a.crowd):
-                    start, end = (here.x, here.y, here.z), (target.x, target.y, target.z)
+                    if route is None:
+                        path = ((here.x, here.y, here.z), (target.x, target.y, target.z))
+                    else:
+                        path = route[0]
                     contact = proximity(
-                        a.crowd, start, end, a.time, move_s, duration, self._collision_distance
+                        a.crowd, path, a.time, move_s, duration, self._collision_distance
                     )
             a.time += duration
             a.step += 1

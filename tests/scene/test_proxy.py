@@ -17,8 +17,17 @@ from havln_mj.scene.proxy.raster import cover_cells
 from havln_mj.scene.proxy.routes import crossings, read_routes, shortest_routes, write_routes
 from havln_mj.scene.proxy.walk import edge_grade, floor_point, path_fault
 
-# Small and large, single- and multi-storey, and scans whose graphs have several components.
-SAMPLE = ["17DRP5sb8fy", "gZ6f7yhEvPG", "pLe4wQe7qrG", "2azQ1b91cZZ", "JF19kD82Mey", "PuKPg4mmafe"]
+# Small and large, single- and multi-storey, scans whose graphs have several components, and
+# a four-storey stairwell with landings at every height (yqstnuAEVhm).
+SAMPLE = [
+    "17DRP5sb8fy",
+    "gZ6f7yhEvPG",
+    "pLe4wQe7qrG",
+    "2azQ1b91cZZ",
+    "JF19kD82Mey",
+    "PuKPg4mmafe",
+    "yqstnuAEVhm",
+]
 P = ProxyParams()
 
 
@@ -154,6 +163,38 @@ def test_a_steep_edge_is_left_undrawn_and_walked_by_its_route():
     assert path_fault(route, loose.boxes, P) is None
 
 
+# ------------------------------------------------------------- drawing near other floors
+
+
+def _walkable(floors: dict, edges: list[tuple[str, str]], edge: tuple[str, str]) -> bool:
+    g = _graph(floors, edges)
+    proxy = build_proxy(g)
+    (e,) = [(a, b) for a, b, _ in g.edges() if {a, b} == set(edge)]
+    return e not in proxy.faults
+
+
+def test_a_landing_beside_a_corridor_stays_below_the_corridors_band():
+    # A viewpoint on a stair landing 0.9 m up stands 0.6 m beside a flat edge: its floor
+    # blends with the corridor's, but not into the band of a body walking the corridor.
+    floors = {"a": (0, 0, 0), "b": (3, 0, 0), "s": (1.5, 0.6, 0.9), "t": (1.5, 3, 1.5)}
+    assert _walkable(floors, [("a", "b"), ("s", "t")], ("a", "b"))
+
+
+def test_storeys_stack_where_a_body_fits_under_the_upper_floor():
+    # Two viewpoints 0.14 m apart in plan, their floors 1.96 m apart: more than a body's
+    # 1.8 m and a slab, so the lower floor keeps its walkway under the upper one.
+    floors = {"l": (0, 0, 0), "l2": (3, 0, 0), "u": (0.1, 0.1, 1.96), "u2": (0.1, 3, 1.96)}
+    assert _walkable(floors, [("l", "l2"), ("u", "u2")], ("l", "l2"))
+
+
+@pytest.mark.parametrize("offset", [0.35, 0.45])
+def test_a_floor_over_the_side_of_a_corridor_keeps_out_of_its_band(offset):
+    # A viewpoint 1.85 m above a corridor, beside its line: its floor may not hang into
+    # the band (1.8 m) of a body walking the corridor; where it must stay, it is thinned.
+    floors = {"a": (0, 0, 0), "b": (4, 0, 0), "u": (2, offset, 1.85), "u2": (2, 3, 1.85)}
+    assert _walkable(floors, [("a", "b"), ("u", "u2")], ("a", "b"))
+
+
 def test_routes_file_round_trip_and_checks(tmp_path):
     routes = {("a", "b"): ("a", "c", "b"), ("d", "e"): ("d", "f", "g", "e")}
     path = tmp_path / "routes.json"
@@ -175,6 +216,10 @@ def test_proxy_params_are_checked():
         ProxyParams(cell=2)
     with pytest.raises(InvalidArgumentError, match="max_grade=0"):
         ProxyParams(max_grade=0)
+    with pytest.raises(InvalidArgumentError, match=r"headroom=1\.8"):
+        ProxyParams(headroom=1.8)  # a body 1.8 m tall cannot pass under a 0.1 m slab
+    assert ProxyParams().reach_cells == 2  # 0.2 m body radius on 0.1 m cells
+    assert ProxyParams(cell=0.05).reach_cells == 4
 
 
 def test_cover_cells_covers_each_cell_once_with_its_key_and_only_spare_cells_besides():
@@ -225,9 +270,10 @@ def test_edges_are_walkable_straight_or_by_route(proxies, scan):
         # ...and the whole route passes the check.
         assert path_fault(np.array([floor_point(graph, v) for v in via]), proxy.boxes, P) is None
     assert proxy.unwalkable == [e for e in proxy.faults if e not in proxy.routes]
-    # Over all 90 graphs (benchmarks/bench_proxies.py) 0.6 % of edges are walkable neither
-    # way, a third of them steeper than 45°; the single-storey samples are clean.
-    if scan in ("17DRP5sb8fy", "gZ6f7yhEvPG", "pLe4wQe7qrG", "PuKPg4mmafe"):
+    # Over all 90 graphs (benchmarks/bench_proxies.py) 0.4 % of edges are walkable neither
+    # way, most of them steeper than 45°; the single-storey samples are clean, and so is the
+    # stairwell.
+    if scan in ("17DRP5sb8fy", "gZ6f7yhEvPG", "pLe4wQe7qrG", "PuKPg4mmafe", "yqstnuAEVhm"):
         assert proxy.unwalkable == []
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 
@@ -207,6 +208,72 @@ def test_is_crushed_catches_a_person_passed_mid_action(graph):
     assert sim.getHumanState() == [[tuple(person)]]
     sim.makeAction([0], [0.0], [0.0])  # waiting at b, far from the person
     assert sim.getState()[0].isCrushed == int(np.hypot(*(pb - person)[:2]) <= 1.0)
+
+
+def _detour(graph):
+    """Viewpoints a, b, c: a-b, a-c and c-b are edges, and c lies over 1.5 m off the line a-b."""
+    for a, b, _ in graph.edges():
+        pa, pb = graph.position(a)[:2], graph.position(b)[:2]
+        for c in graph.neighbors(a):
+            if c == b or c not in graph.neighbors(b):
+                continue
+            pc = graph.position(c)[:2]
+            t = np.clip((pc - pa) @ (pb - pa) / ((pb - pa) @ (pb - pa)), 0.0, 1.0)
+            if np.hypot(*(pc - pa - t * (pb - pa))) > 1.5:
+                return a, b, c
+    raise AssertionError("proc-0 has no such triangle")
+
+
+@pytest.fixture()
+def routed(graph, monkeypatch):
+    """proc-0 with one edge a-b walked by a route through c, as graph proxies store them."""
+    a, b, c = _detour(graph)
+    real = scenes.load_scan
+    monkeypatch.setattr(
+        scenes,
+        "load_scan",
+        lambda *args, **kwargs: dataclasses.replace(
+            real(*args, **kwargs), routes={(a, b): (a, c, b)}
+        ),
+    )
+    return a, b, c
+
+
+def test_a_routed_edge_takes_its_routes_time_and_passes_its_people(graph, routed):
+    a, b, c = routed
+    pa, pb, pc = (graph.position(v) for v in (a, b, c))
+    route = float(np.linalg.norm(pc - pa) + np.linalg.norm(pb - pc))
+    person = pc - [0.0, 0.0, 1.0]  # on the route, over 1.5 m from the straight line
+    for start, end in ((a, b), (b, a)):  # the route is walked backwards from b
+        sim = _sim(speed=0.5, humans=lambda scan, g, rng: _Standing([person]))
+        sim.newEpisode(
+            [SCAN], [start], [heading_to(graph.position(start), graph.position(end))], [0.0]
+        )
+        ids = [v.viewpointId for v in sim.getState()[0].navigableLocations]
+        sim.makeAction([ids.index(end)], [0.0], [0.0])
+        state = sim.getState()[0]
+        assert state.location.viewpointId == end
+        assert state.time == pytest.approx(route / 0.5)  # not the straight distance
+        assert state.isCrushed == 1 and state.minHumanDistance < 0.05
+    # The other edges are walked straight: a-c passes the person only at its end.
+    sim = _sim(speed=0.5, humans=lambda scan, g, rng: _Standing([person]))
+    sim.newEpisode([SCAN], [a], [heading_to(pa, pc)], [0.0])
+    ids = [v.viewpointId for v in sim.getState()[0].navigableLocations]
+    sim.makeAction([ids.index(c)], [0.0], [0.0])
+    assert sim.getState()[0].time == pytest.approx(float(np.linalg.norm(pc - pa)) / 0.5)
+
+
+def test_an_edge_walked_straight_misses_a_person_off_its_line(graph):
+    a, b, c = _detour(graph)  # no route stored: a-b is walked straight
+    person = graph.position(c) - [0.0, 0.0, 1.0]
+    sim = _sim(humans=lambda scan, g, rng: _Standing([person]))
+    pa, pb = graph.position(a), graph.position(b)
+    sim.newEpisode([SCAN], [a], [heading_to(pa, pb)], [0.0])
+    ids = [v.viewpointId for v in sim.getState()[0].navigableLocations]
+    sim.makeAction([ids.index(b)], [0.0], [0.0])
+    state = sim.getState()[0]
+    assert state.time == pytest.approx(float(np.linalg.norm(pb - pa)))
+    assert state.isCrushed == 0 and state.minHumanDistance > 1.5
 
 
 def test_scenes_without_people_report_no_collision():

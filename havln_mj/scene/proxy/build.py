@@ -25,7 +25,13 @@ import numpy as np
 from havln_mj.scene.boxes import BoxSet
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.proxy.draw import layer_boxes
-from havln_mj.scene.proxy.layers import Edge, Layer, rasterise, separate_components
+from havln_mj.scene.proxy.layers import (
+    Edge,
+    Layer,
+    clear_overhangs,
+    rasterise,
+    separate_components,
+)
 from havln_mj.scene.proxy.params import ProxyParams
 from havln_mj.scene.proxy.raster import Grid
 from havln_mj.scene.proxy.routes import crossings, shortest_routes
@@ -128,6 +134,7 @@ def _draw(
     graph: NavGraph, edges: list[Edge], grid: Grid, p: ProxyParams, comp_of: dict[str, int]
 ) -> tuple[list[Layer], BoxSet]:
     layers = rasterise(graph, edges, grid, p, comp_of)
+    clear_overhangs(layers, p)
     for layer in layers:
         separate_components(layer)
     return layers, layer_boxes(layers, grid, p)

@@ -3,25 +3,28 @@
 Each layer's free cells become floor boxes at their blended height, rounded to 2 cm: a stair
 is a rough ramp at its edge's grade whose ledges the GO1's blind trot steps over (at 5 cm, one
 graph action in ten tripped it on flat floors alone). The cells around a layer's free cells
-become walls, except where another layer needs that space to walk.
+become walls, except where another layer needs that space to walk: a wall within reach of a
+body walking another floor ends below its band or starts above it. A floor slab over a
+walkway is thinned (down to ``min_slab``) to keep the band of the bodies below clear.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import binary_dilation
+from scipy.ndimage import binary_dilation, maximum_filter
 
 from havln_mj.scene.boxes import BoxSet
-from havln_mj.scene.proxy.layers import Layer
+from havln_mj.scene.proxy.layers import FLOOR_QUANTUM, Layer
 from havln_mj.scene.proxy.params import ProxyParams
-from havln_mj.scene.proxy.raster import Grid, cover_cells
+from havln_mj.scene.proxy.raster import Grid, cover_cells, neighbours
 
 FLOOR_RGBA = (0.62, 0.55, 0.45, 1.0)
 STAIR_RGBA = (0.50, 0.42, 0.34, 1.0)
 WALL_RGBA = (0.86, 0.85, 0.80, 1.0)
 _EIGHT = np.ones((3, 3), dtype=bool)
 _NEAR = 4  # cells: within this of another layer's floor, boxes keep to their own cells
-_Q = 0.02  # floor height quantum
+_Q = FLOOR_QUANTUM
+_EPS = 1e-6  # metres
 _WALL_Q = 0.1  # wall top quantum under another layer's floor
 
 
@@ -48,19 +51,14 @@ def layer_boxes(layers: list[Layer], grid: Grid, p: ProxyParams) -> BoxSet:
         z1 = np.ceil((nmax + p.wall_height) / 0.5) * 0.5  # wall tops need no precision
         for j, other in enumerate(layers):
             if j != k:
-                # A wall stops under a floor of another layer above its foot; where another
-                # layer walks lower down, its body band must stay clear of the wall.
-                with np.errstate(invalid="ignore"):
-                    above = frees[j] & (other.height > z0)
-                    under = np.floor((other.height - p.slab) / _WALL_Q) * _WALL_Q
-                    z1 = np.where(above, np.minimum(z1, under), z1)
-                    blocks = (z0 < other.height + p.body_z[1]) & (z1 > other.height + p.body_z[0])
-                wall &= ~(frees[j] & blocks) & (z1 > z0 + _Q / 2)
+                z0, z1 = _clear_bodies(z0, z1, frees[j], _top(other.height), p)
+        wall &= z1 > z0 + _Q / 2
         # Cells where a box may stand although none is needed: the layer's walls and what
         # lies beyond them, unless another layer walks near.
         spare = ~free & ~near_other
-        top = np.round(np.nan_to_num(height) / _Q) * _Q
-        lo, hi, rects = _cell_boxes(grid, free, top - p.slab, top, spare)
+        top = _top(np.nan_to_num(height))
+        under = _underside(top, layers, p)
+        lo, hi, rects = _cell_boxes(grid, free, under, top, spare)
         # A box is stairs where most of its cells are.
         stairs = _rect_sums(free & layer.stair, rects) * 2 > _rect_sums(free, rects)
         sets.append(_set(lo[~stairs], hi[~stairs], "floor", "floor", FLOOR_RGBA))
@@ -77,6 +75,58 @@ def layer_boxes(layers: list[Layer], grid: Grid, p: ProxyParams) -> BoxSet:
 
 def _set(lo: np.ndarray, hi: np.ndarray, kind: str, material: str, rgba: tuple) -> BoxSet:
     return BoxSet(lo, hi, (kind,) * len(lo), (material,) * len(lo), np.tile(rgba, (len(lo), 1)))
+
+
+def _top(height: np.ndarray) -> np.ndarray:
+    """The drawn floor tops of floor heights ``height`` (rounded to ``_Q``)."""
+    return np.round(height / _Q) * _Q
+
+
+def _underside(top: np.ndarray, layers: list[Layer], p: ProxyParams) -> np.ndarray:
+    """Floor slab bottoms under tops ``top``: ``slab`` below, or thinner over a walkway.
+
+    A body walking a path (standing on its line cells) below the floor, within reach of the
+    cell, keeps its band clear: the slab's underside rises to the band's top, leaving the
+    slab at least ``min_slab`` thick.
+    """
+    under = top - p.slab
+    for layer in layers:
+        support = np.where(layer.line & layer.free, _top(layer.height), np.nan)
+        for below in neighbours(support, p.reach_cells):
+            with np.errstate(invalid="ignore"):
+                lift = below + p.body_z[0] < top
+            raised = np.maximum(under, np.minimum(below + p.body_z[1], top - p.min_slab))
+            under = np.where(lift, raised, under)
+    return under
+
+
+def _clear_bodies(
+    z0: np.ndarray, z1: np.ndarray, free: np.ndarray, height: np.ndarray, p: ProxyParams
+) -> tuple[np.ndarray, np.ndarray]:
+    """Wall spans ``z0..z1`` clear of the bodies walking another layer's floor (tops ``height``).
+
+    A wall stops under a floor of the other layer above its foot. A body standing on the
+    other layer reaches the walls within ``body_radius`` of its footprint's centre, which
+    stands on a free cell at most ``reach_cells`` away: a wall whose span meets the body band
+    over the floors within that reach is dropped where the other layer is free, else ends
+    below the band (the other layer lies above its foot) or starts above it (below its foot).
+    """
+    with np.errstate(invalid="ignore"):
+        above = free & (height > z0)
+        under = np.floor((height - p.slab) / _WALL_Q) * _WALL_Q
+        z1 = np.where(above, np.minimum(z1, under), z1)
+        size = 2 * p.reach_cells + 1
+        lo = -maximum_filter(np.where(free, -height, -np.inf), size=size)
+        hi = maximum_filter(np.where(free, height, -np.inf), size=size)
+        meets = (z0 < hi + p.body_z[1]) & (z1 > lo + p.body_z[0])
+        over = meets & (lo > z0)
+        # A hair's margin, so that the check's own sums cannot round into the wall.
+        below = np.floor((lo + p.body_z[0] - _EPS) / _Q) * _Q
+        z1 = np.where(over, np.minimum(z1, below), z1)
+        above_band = np.ceil((hi + p.body_z[1] + _EPS) / _Q) * _Q
+        z0 = np.where(meets & ~over, np.maximum(z0, above_band), z0)
+        z1 = np.where(free & meets, -np.inf, z1)
+    return z0, z1
 
 
 def _neighbour_extremes(height: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

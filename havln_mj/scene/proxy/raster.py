@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,22 +37,57 @@ class Grid:
         return slice(r0, r1), slice(c0, c1), gx, gy
 
 
-def disc(grid: Grid, centre: np.ndarray, radius: float) -> tuple[tuple[slice, slice], np.ndarray]:
-    """Cells near a disc: (window, distance to the centre) over the window."""
+def disc(
+    grid: Grid, centre: np.ndarray, radius: float
+) -> tuple[tuple[slice, slice], np.ndarray, np.ndarray]:
+    """Cells near a disc: (window, distance and Chebyshev distance to the centre)."""
     rs, cs, gx, gy = grid.window(centre - radius, centre + radius)
-    return (rs, cs), np.hypot(gx - centre[0], gy - centre[1])
+    dx, dy = np.abs(gx - centre[0]), np.abs(gy - centre[1])
+    return (rs, cs), np.hypot(dx, dy), np.maximum(dx, dy)
 
 
 def corridor(
     grid: Grid, a: np.ndarray, b: np.ndarray, half_width: float
-) -> tuple[tuple[slice, slice], np.ndarray, np.ndarray]:
-    """Cells near segment a-b: (window, distance to the segment, position t ∈ [0, 1] along it)."""
+) -> tuple[tuple[slice, slice], np.ndarray, np.ndarray, np.ndarray]:
+    """Cells near segment a-b.
+
+    Returns:
+        The window, and over it each cell's distance and Chebyshev distance to the segment
+        and its position t ∈ [0, 1] along it.
+    """
     rs, cs, gx, gy = grid.window(np.minimum(a, b) - half_width, np.maximum(a, b) + half_width)
     ab = b - a
     denom = float(ab @ ab) or 1.0
     t = np.clip(((gx - a[0]) * ab[0] + (gy - a[1]) * ab[1]) / denom, 0.0, 1.0)
     d = np.hypot(gx - (a[0] + t * ab[0]), gy - (a[1] + t * ab[1]))
-    return (rs, cs), d, t
+    return (rs, cs), d, chebyshev(gx - a[0], gy - a[1], ab), t
+
+
+def chebyshev(qx: np.ndarray, qy: np.ndarray, ab: np.ndarray) -> np.ndarray:
+    """Chebyshev (max-norm) distance from points ``(qx, qy)`` to the segment from 0 to ``ab``.
+
+    The distance along the segment, ``max(|qx − t·abx|, |qy − t·aby|)``, is convex and
+    piecewise linear in t: its minimum over [0, 1] lies at an end or where a term vanishes or
+    the two terms meet.
+    """
+    ux, uy = float(ab[0]), float(ab[1])
+    cands = [np.zeros_like(qx), np.ones_like(qx)]
+    for num, den in ((qx, ux), (qy, uy), (qx - qy, ux - uy), (qx + qy, ux + uy)):
+        if abs(den) > 1e-12:
+            cands.append(np.clip(num / den, 0.0, 1.0))
+    return np.min([np.maximum(np.abs(qx - t * ux), np.abs(qy - t * uy)) for t in cands], axis=0)
+
+
+def neighbours(arr: np.ndarray, n: int) -> Iterator[np.ndarray]:
+    """``arr`` shifted by every offset of up to ``n`` cells in each axis (nan past its edges).
+
+    Each yielded array holds, at each cell, the value of one neighbour of that cell.
+    """
+    h, w = arr.shape
+    pad = np.pad(arr.astype(float), n, constant_values=np.nan)
+    for dr in range(2 * n + 1):
+        for dc in range(2 * n + 1):
+            yield pad[dr : dr + h, dc : dc + w]
 
 
 def cover_cells(key: np.ndarray, spare: np.ndarray) -> list[tuple[int, int, int, int, int]]:
