@@ -95,17 +95,16 @@ class VLNCM(nn.Module):
     ) -> tuple[torch.Tensor, torch.Tensor, tuple[torch.Tensor, torch.Tensor]]:
         """Encodes ``(B, L)`` token ids.
 
+        An empty instruction (HA-R2R has a few) is read as one padding token, so the agent
+        still acts, on what it sees.
+
         Returns:
             The word contexts ``(B, L, H)``, the padding mask ``(B, L)`` (True at padding)
             and the decoder's initial state.
-
-        Raises:
-            InvalidArgumentError: An instruction has no tokens.
         """
         pad = instruction == 0
+        pad[pad.all(dim=1), 0] = False
         lengths = (~pad).sum(1)
-        if (lengths == 0).any():
-            raise InvalidArgumentError("an instruction has no tokens (all padding)")
         packed = nn.utils.rnn.pack_padded_sequence(
             self.drop(self.embed(instruction)),
             lengths.cpu(),
