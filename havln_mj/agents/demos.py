@@ -15,7 +15,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from havln_mj.errors import InvalidArgumentError
-from havln_mj.tasks.rewards import SUCCESS_DISTANCE, RewardFn, StepOutcome, get_reward
+from havln_mj.tasks.rewards import (
+    SUCCESS_DISTANCE,
+    RewardFn,
+    StepOutcome,
+    get_reward,
+    step_reward,
+)
 
 N_ACTIONS = 6  # STOP, FORWARD, TURN_LEFT, TURN_RIGHT, LOOK_UP, LOOK_DOWN
 
@@ -81,13 +87,10 @@ class Demo:
     def rewards(self, reward: str | RewardFn = "paper") -> np.ndarray:
         """``(T,)`` float32 reward of each action (a reward of :mod:`havln_mj.tasks.rewards`)."""
         fn = get_reward(reward)
-        out = np.empty(len(self), np.float32)
-        for t in range(len(self)):
-            outcome = StepOutcome(
-                stopped=bool(self.actions[t] == 0),
-                distance=float(self.distance[t]),
-                delta=float(self.delta[t]),
-                collided=bool(self.collided[t]),
+        outcomes = (
+            StepOutcome(bool(a == 0), float(d), float(dd), bool(c))
+            for a, d, dd, c in zip(
+                self.actions, self.distance, self.delta, self.collided, strict=True
             )
-            out[t] = sum(fn(outcome).values())
-        return out
+        )
+        return np.array([step_reward(fn, o) for o in outcomes], np.float32)

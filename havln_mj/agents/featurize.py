@@ -137,17 +137,23 @@ def _depth_cells(depth: np.ndarray) -> np.ndarray:
     return np.where(valid > 0, d.sum(axis=(2, 4)) / np.maximum(valid, 1), 0.0).astype(np.float32)
 
 
-def _flatten(views: Sequence[ViewpointViews], cfg: ViewConfig) -> tuple[np.ndarray, ...]:
-    """Images and pretraining targets of many viewpoints, one row per view and slot."""
+def _images(views: Sequence[ViewpointViews], cfg: ViewConfig) -> tuple[np.ndarray, ...]:
+    """RGB ``(N, H, W, 3)`` and depth ``(N, H, W)`` (or None), one row per view and slot."""
     rgb = np.concatenate([v.rgb.reshape(-1, cfg.height, cfg.width, 3) for v in views])
     depth = None
     if cfg.depth:
         depth = np.concatenate([v.depth.reshape(-1, cfg.height, cfg.width) for v in views])
+    return rgb, depth
+
+
+def _targets(views: Sequence[ViewpointViews], cfg: ViewConfig) -> dict[str, np.ndarray]:
+    """The pretraining targets of :func:`_images`' rows (depth cells added by the caller)."""
     slots = cfg.slots
-    person = np.concatenate([v.person.reshape(-1) for v in views])
-    forward = np.concatenate([np.repeat(v.forward, slots) for v in views]).astype(np.float32)
-    region = np.concatenate([np.full(v.rgb.shape[0] * slots, v.region) for v in views])
-    return rgb, depth, person, forward, region
+    return {
+        "region": np.concatenate([np.full(v.rgb.shape[0] * slots, v.region) for v in views]),
+        "person": np.concatenate([v.person.reshape(-1) for v in views]),
+        "forward": np.concatenate([np.repeat(v.forward, slots) for v in views]).astype(np.float32),
+    }
 
 
 def pretrain(
@@ -160,11 +166,11 @@ def pretrain(
         vps = renderer.viewpoints(scene)
         pick = rng.permutation(len(vps))[: spec.pretrain_viewpoints]
         views += list(renderer.render(scene, [vps[i] for i in sorted(pick)]))
-    rgb, depth, person, forward, region = _flatten(views, spec.view)
+    rgb, depth = _images(views, spec.view)
     # Validation rows come from viewpoints the encoder never trained on.
     per_vp = views[0].rgb.shape[0] * spec.view.slots
     groups = np.repeat(np.arange(len(views)), per_vp)
-    targets = {"region": region, "person": person, "forward": forward}
+    targets = _targets(views, spec.view)
     if depth is not None:
         targets["depth"] = _depth_cells(depth)
     torch.manual_seed(spec.seed)
@@ -196,7 +202,7 @@ def encode_scans(
     for scene in tqdm(missing, desc="features", unit="scene", disable=not progress):
         vps, feats = [], []
         for v in renderer.render(scene):
-            rgb, depth, *_ = _flatten([v], cfg)
+            rgb, depth = _images([v], cfg)
             feats.append(encode_views(encoder, rgb, depth).reshape(-1, cfg.slots, store.dim))
             vps.append(v.viewpoint)
         store.put(scene, vps, np.stack(feats))

@@ -32,13 +32,16 @@ def action_mask(state: SimState, half_hfov: float) -> np.ndarray:
     return mask
 
 
-def observe(store: FeatureStore, state: SimState, half_hfov: float) -> np.ndarray:
-    """``(D + PROPRIO_DIM,)`` float32: the view feature, then the agent's own inputs."""
+def observe(store: FeatureStore, state: SimState, mask: np.ndarray) -> np.ndarray:
+    """``(D + PROPRIO_DIM,)`` float32: the view feature, then the agent's own inputs.
+
+    ``mask`` is the state's :func:`action_mask` (its FORWARD entry is an input).
+    """
     out = np.zeros(store.dim + PROPRIO_DIM, np.float32)
     out[: store.dim] = store.feature(
         state.scanId, state.location.viewpointId, state.viewIndex, state.time
     )
     out[store.dim + state.viewIndex // HEADING_COUNT] = 1.0
-    out[store.dim + 3] = float(forward_possible(state, half_hfov))
+    out[store.dim + 3] = float(mask[EgoAction.FORWARD])
     out[store.dim + 4] = float(state.isCrushed)
     return out

@@ -26,7 +26,7 @@ from havln_mj.sim.egocentric import EgoAction
 from havln_mj.sim.state import SimState
 from havln_mj.sim.viewing import ELEVATION_INCREMENT
 from havln_mj.tasks.experts import ExpertContext
-from havln_mj.tasks.rewards import StepOutcome, get_reward
+from havln_mj.tasks.rewards import StepOutcome, get_reward, step_reward
 
 MAX_STEPS = 30  # HA3D's agents act at most 30 times
 
@@ -104,10 +104,10 @@ class AgentExpert:
         distance = ctx.graph.distance(state.location.viewpointId, ctx.goal)
         if ctx.step > 0:
             outcome = StepOutcome(False, distance, distance - self._distance, bool(state.isCrushed))
-            last_reward = float(sum(self._reward(outcome).values()))
+            last_reward = step_reward(self._reward, outcome)
         self._distance = distance
-        obs = observe(self.store, state, half)
-        action = self.policy.act(obs, action_mask(state, half), last_reward)
+        mask = action_mask(state, half)
+        action = self.policy.act(observe(self.store, state, mask), mask, last_reward)
         return EgoAction(action)
 
 

@@ -168,8 +168,8 @@ class EgoRollouts:
         """``(B, D)`` observations and ``(B, 6)`` action masks of every element."""
         half = self.sim.half_hfov
         states = self.sim.getState()
-        obs = np.stack([observe(self.store, s, half) for s in states])
         masks = np.stack([action_mask(s, half) for s in states])
+        obs = np.stack([observe(self.store, s, m) for s, m in zip(states, masks, strict=True)])
         return obs, masks
 
     def expert_actions(self) -> np.ndarray:

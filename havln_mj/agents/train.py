@@ -51,7 +51,7 @@ from havln_mj.cache import atomic_write_bytes, atomic_write_json
 from havln_mj.errors import HavlnError, InvalidArgumentError, MissingDataError
 from havln_mj.paths import cache_dir, project_home
 from havln_mj.tasks.datasets import Instruction
-from havln_mj.tasks.rewards import SUCCESS_DISTANCE, StepOutcome, get_reward
+from havln_mj.tasks.rewards import SUCCESS_DISTANCE, StepOutcome, get_reward, step_reward
 from havln_mj.tasks.vocab import Vocabulary
 
 FEEDBACKS = ("teacher", "sample", "mixed")
@@ -265,7 +265,7 @@ def evaluate(
                 out = StepOutcome(
                     bool(r.stopped[i]), float(r.distance[i]), float(r.delta[i]), bool(r.collided[i])
                 )
-                last[i] = float(sum(fn(out).values()))
+                last[i] = step_reward(fn, out)
                 hits[i] += r.collided[i]
                 final[i] = r.distance[i]
         results += [(f < SUCCESS_DISTANCE, f, h) for f, h in zip(final, hits, strict=True)]

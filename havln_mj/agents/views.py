@@ -25,6 +25,7 @@ import numpy as np
 
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.scene.regions import REGION_LABELS
+from havln_mj.sim.egocentric import EgoAction, ego_to_mattersim
 from havln_mj.sim.simulator import Simulator
 from havln_mj.sim.state import SimState
 from havln_mj.sim.viewing import (
@@ -100,8 +101,8 @@ def view_angles() -> tuple[np.ndarray, np.ndarray]:
 
 
 def forward_possible(state: SimState, half_hfov: float) -> bool:
-    """Whether FORWARD would move: a navigable viewpoint within half the HFOV of the heading."""
-    return any(abs(loc.rel_heading) <= half_hfov for loc in state.navigableLocations[1:])
+    """Whether FORWARD would move (the simulator's own rule: a viewpoint within the HFOV)."""
+    return ego_to_mattersim(EgoAction.FORWARD, state, half_hfov)[0] != 0
 
 
 @dataclass(frozen=True)

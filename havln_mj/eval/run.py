@@ -69,11 +69,6 @@ def make_agent(
     if name.endswith(".pt"):
         from havln_mj.agents.policy import load_agent  # torch: only for trained agents
 
-        if getattr(args, "threads", None):
-            import torch
-
-            torch.set_num_threads(args.threads)
-
         return load_agent(
             name,
             seed=getattr(args, "seed", 0),
@@ -204,6 +199,10 @@ def run_cli(args: argparse.Namespace, evaluate: SplitRunner = evaluate_split) ->
     Returns:
         The process exit code (2 on bad input, with the message on stderr).
     """
+    if args.agent.endswith(".pt") and args.threads:
+        import torch  # a trained agent: torch is installed
+
+        torch.set_num_threads(args.threads)
     try:
         make_agent(args.agent, args)  # fail at once on a bad agent
         splits: list[tuple[str, list[Episode]]] = []

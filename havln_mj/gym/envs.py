@@ -74,13 +74,9 @@ def procedural_episodes(scenes: tuple[str, ...], per_scene: int, seed: int) -> t
 
     Scene ``i`` gets path ids from ``i * 10_000``, as :func:`build_split` numbers a split.
     """
-    from havln_mj.scene.scan import load_scan
-    from havln_mj.tasks.procedural import SCENE_STRIDE, scene_episodes
+    from havln_mj.tasks.procedural import procedural_episodes as generate
 
-    out: list[Episode] = []
-    for i, scene in enumerate(scenes):
-        out += scene_episodes(load_scan(scene), per_scene, seed, i * SCENE_STRIDE)
-    return tuple(out)
+    return tuple(generate(scenes, per_scene, seed, first_id=0))
 
 
 def _positive_int(name: str, value: object) -> int:

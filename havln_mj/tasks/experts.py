@@ -376,6 +376,15 @@ class EgoRoutes:
         return action if math.isfinite(best) else None
 
 
+def _level_camera(state: SimState) -> EgoAction | None:
+    """LOOK_DOWN / LOOK_UP while the camera is off level (egocentric experts plan level)."""
+    if state.elevation > TURN / 2:
+        return EgoAction.LOOK_DOWN
+    if state.elevation < -TURN / 2:
+        return EgoAction.LOOK_UP
+    return None
+
+
 def _sim_half_hfov(sim: object) -> float:
     # The simulator's own half-HFOV rule decides FORWARD.
     return float(getattr(sim, "half_hfov", DEFAULT_HALF_HFOV))
@@ -414,10 +423,9 @@ class ShortestPathExpert:
         self._plan = []
 
     def _ego(self, ctx: ExpertContext, state: SimState) -> EgoAction:
-        if state.elevation > TURN / 2:
-            return EgoAction.LOOK_DOWN
-        if state.elevation < -TURN / 2:
-            return EgoAction.LOOK_UP
+        level = _level_camera(state)
+        if level is not None:
+            return level
         here = state.location.viewpointId
         if self._plan:
             # Follow the plan while the simulator lands where it was expected to.
@@ -537,10 +545,9 @@ class HumanAwareExpert:
         self._route = self._global_route(ctx, ctx.episode.start) if self.mode == "global" else None
 
     def _ego(self, ctx: ExpertContext, state: SimState) -> EgoAction:
-        if state.elevation > TURN / 2:
-            return EgoAction.LOOK_DOWN
-        if state.elevation < -TURN / 2:
-            return EgoAction.LOOK_UP
+        level = _level_camera(state)
+        if level is not None:
+            return level
         here, goal, graph = state.location.viewpointId, ctx.goal, ctx.graph
         if here == goal:
             return STOP

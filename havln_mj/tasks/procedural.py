@@ -150,16 +150,16 @@ def scene_episodes(
 
 
 def procedural_episodes(
-    scenes: Sequence[str], per_scene: int, seed: int, skip: int = 0
+    scenes: Sequence[str], per_scene: int, seed: int, skip: int = 0, first_id: int = SCENE_STRIDE
 ) -> list[Episode]:
     """Episodes of several procedural scenes (the evaluation harness's ``--scenes``).
 
-    Scene ``s`` (in the given order) gets path ids from ``10_000 * (s + 1)``; ``skip`` leaves
-    out each scene's first paths (another split's: val_seen after train).
+    Scene ``s`` (in the given order) gets path ids from ``first_id + 10_000 * s``; ``skip``
+    leaves out each scene's first paths (another split's: val_seen after train).
     """
     out: list[Episode] = []
     for s, scene in enumerate(scenes):
-        first = SCENE_STRIDE * (s + 1)
+        first = first_id + SCENE_STRIDE * s
         out += scene_episodes(load_scan(scene), per_scene, seed, first_path_id=first, skip=skip)
     return out
 

@@ -104,6 +104,11 @@ REWARDS: dict[str, RewardFn] = {
 }
 
 
+def step_reward(fn: RewardFn, outcome: StepOutcome) -> float:
+    """The step's reward: the sum of ``fn``'s terms for ``outcome``."""
+    return float(sum(fn(outcome).values()))
+
+
 def get_reward(reward: str | RewardFn) -> RewardFn:
     """A reward function by name (see :data:`REWARDS`), or ``reward`` itself if callable.
 
