@@ -3,8 +3,9 @@
 Prints one JSON object:
 
 * a row per scan: build time, floor/stair/wall box counts, layers, and its edges walked
-  straight, walked by a route, and unwalkable (by cause; ``crossing`` marks edges whose
-  straight corridor provably cannot coexist with a drawn edge's);
+  straight, walked by a route (``by_flight`` of them along a flight drawn for the edge), and
+  unwalkable (by cause; ``crossing`` marks edges whose straight corridor provably cannot
+  coexist with a drawn edge's);
 * totals, with the unwalkable edges by cause and by proof: ``steep`` edges climb more than
   ``max_grade`` end to end (no straight walk exists whatever is drawn), ``crossing`` ones
   cannot be drawn straight beside another edge, the rest are faults of the drawing;
@@ -90,6 +91,7 @@ def main() -> int:
                 "layers": len(proxy.free),
                 "straight": graph.num_edges - len(proxy.faults),
                 "by_route": len(proxy.routes),
+                "by_flight": len(proxy.flights),
                 "unwalkable_edges": len(proxy.unwalkable),
                 "unwalkable_by_cause": dict(sorted(unwalkable.items())),
             }
@@ -110,6 +112,7 @@ def main() -> int:
                 "edges": total_edges,
                 "straight": sum(r["straight"] for r in rows),
                 "by_route": sum(r["by_route"] for r in rows),
+                "by_flight": sum(r["by_flight"] for r in rows),
                 "unwalkable_edges": bad,
                 "unwalkable_fraction": round(bad / total_edges, 4),
                 "unwalkable_by_cause": dict(sorted(causes.items())),

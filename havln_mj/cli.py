@@ -38,6 +38,7 @@ def build_one(
         "collision": world.collision,
         "collision_geoms": world.n_collision_geoms,
         "edges_by_route": len(scan.routes),
+        "edges_by_flight": scan.meta.get("edges_by_flight"),
         "unwalkable_edges": scan.meta.get("unwalkable_edges"),
         "seconds": round(time.perf_counter() - t0, 2),
     }
@@ -62,6 +63,8 @@ def _summary(row: dict) -> str:
     geoms = f"{row['collision_geoms']} {row['collision']} collision geoms"
     routes = row["edges_by_route"]
     walks = f"{routes} edge{'' if routes == 1 else 's'} walked by route"
+    if row["edges_by_flight"]:
+        walks += f" ({row['edges_by_flight']} along a flight drawn for it)"
     if row["unwalkable_edges"] is not None:
         walks += f", {row['unwalkable_edges']} unwalkable"
     return (

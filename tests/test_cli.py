@@ -28,6 +28,10 @@ def test_scenes_build_says_how_many_edges_a_proxy_walks_by_route(shared_data, ca
     out = capsys.readouterr().out
     assert "5LpN3gDmAk7: graph proxy" in out
     assert "1 edge walked by route, 0 unwalkable" in out
+    # D7G3Y4RVNrH's proxy draws a flight for a steep edge (see test_realscan).
+    assert main(["scenes", "build", "D7G3Y4RVNrH", *argv[3:], "--collision", "boxes"]) == 0
+    out = capsys.readouterr().out
+    assert "1 edge walked by route (1 along a flight drawn for it), 0 unwalkable" in out
 
 
 def test_dataset_build_writes_a_split(tmp_path, capsys):

@@ -40,7 +40,7 @@ CONNECTIVITY_HOW_TO = (
     f"set {CONNECTIVITY_ENV}"
 )
 # Bump when proxies or converted scans change: cached ones are rebuilt.
-REAL_SCAN_VERSION = 3
+REAL_SCAN_VERSION = 4
 
 
 def resolve_connectivity_dir(arg: Path | str | None) -> Path | None:
@@ -126,6 +126,7 @@ def build_real_scan(
                 kind="graph proxy",
                 unwalkable_edges=len(proxy.unwalkable),
                 edges_by_route=len(proxy.routes),
+                edges_by_flight=len(proxy.flights),
                 mesh_search=str(mesh_error).split(". ")[0] if mesh_error else None,
             )
         regions.write(staging / REGIONS)

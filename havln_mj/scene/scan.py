@@ -19,7 +19,7 @@ from havln_mj.scene.boxes import BoxSet
 from havln_mj.scene.ids import parse_scene_id
 from havln_mj.scene.mesh import MeshPart, load_mesh_parts, parts_to_trimesh
 from havln_mj.scene.navgraph import NavGraph, level_groups
-from havln_mj.scene.proxy.routes import read_routes
+from havln_mj.scene.proxy.routes import Route, read_routes
 from havln_mj.scene.regions import Regions
 from havln_mj.scene.scanfolder import (
     BOXES,
@@ -48,8 +48,8 @@ class Scan:
         boxes: Exact box geometry when the folder has ``boxes.json``, else None (the world
             builder then decomposes the mesh with CoACD).
         meta: The folder's ``scan.json`` content.
-        routes: Edges a body walks by a route through other viewpoints rather than straight
-            (``routes.json``; graph proxies), as ``(a, b) -> (a, ..., b)``.
+        routes: Edges a body walks by a route rather than straight (``routes.json``; graph
+            proxies), as ``(a, b) -> (a, ..., b)`` through viewpoints or floor points.
     """
 
     scene_id: str
@@ -60,10 +60,10 @@ class Scan:
     regions: Regions | None
     boxes: BoxSet | None
     meta: dict[str, Any] = field(default_factory=dict)
-    routes: dict[tuple[str, str], tuple[str, ...]] = field(default_factory=dict)
+    routes: dict[tuple[str, str], Route] = field(default_factory=dict)
 
-    def route(self, a: str, b: str) -> tuple[str, ...] | None:
-        """The viewpoints a body walks through from ``a`` to ``b``, or None when straight."""
+    def route(self, a: str, b: str) -> Route | None:
+        """The stops a body walks through from ``a`` to ``b``, or None when straight."""
         if (a, b) in self.routes:
             return self.routes[(a, b)]
         if (b, a) in self.routes:

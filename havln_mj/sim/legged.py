@@ -8,7 +8,8 @@ GO1, compiled once; each batch element is a :class:`LeggedAgent` with its own ``
   correct once more when the robot ends more than :attr:`LeggedOptions.retry_m` away; then
   turn to the heading MatterSim would have (the old heading plus the requested change). An
   edge the scan walks by a route (a graph proxy's line of sight across a stairwell, say:
-  :attr:`~havln_mj.scene.scan.Scan.routes`) is walked through the route's viewpoints.
+  :attr:`~havln_mj.scene.scan.Scan.routes`) is walked through the route's stops: viewpoints,
+  or the floor points of a flight drawn for it.
 * **Continuous actions** (the real-robot setting): forward ``forward_m``, turn
   ``±turn_rad``, stop.
 * **Time**: every action advances the element's clock by the physics time it took.
@@ -35,6 +36,7 @@ from havln_mj.robot.go1.model import add_go1
 from havln_mj.robot.go1.primitives import Go1Body, OnTick, PrimitiveResult
 from havln_mj.scene.navgraph import LEVEL_GAP
 from havln_mj.scene.navgrid import NavGrid, build_navgrids
+from havln_mj.scene.proxy.routes import route_floor_points
 from havln_mj.scene.scan import Scan, floor_heights
 from havln_mj.sim.crowd import NO_CROWD, Crowd, Proximity, track_proximity
 from havln_mj.sim.rendering import View, ViewSettings, shoot
@@ -128,7 +130,7 @@ class LeggedWorld:
 
         Empty unless the robot stands within ``_AT_VIEWPOINT`` of a viewpoint (horizontally,
         on its floor) and ``target`` is the floor point of a viewpoint whose edge with it the
-        scan walks by a route; then the route's inner viewpoints, in order.
+        scan walks by a route; then the floor points of the route's inner stops, in order.
         """
         if not self.scan.routes:
             return []
@@ -143,8 +145,7 @@ class LeggedWorld:
         route = self.scan.route(nodes[here[np.argmin(gap[here])]], nodes[there[0]])
         if route is None:
             return []
-        index = {v: k for k, v in enumerate(nodes)}
-        return [fl[index[v]] for v in route[1:-1]]
+        return list(route_floor_points(self.scan.graph, route)[1:-1])
 
     def geodesic(self, start: np.ndarray, goal: np.ndarray) -> float:
         """Walking distance between two floor points on one level (``inf`` if none).

@@ -25,6 +25,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from havln_mj.scene.navgraph import NavGraph
+from havln_mj.scene.proxy.routes import Route, route_camera_points
 from havln_mj.sim.state import ViewPoint
 
 _PI = math.pi
@@ -50,7 +51,7 @@ class NavTable:
         self,
         scan_id: str,
         graph: NavGraph,
-        routes: Mapping[tuple[str, str], tuple[str, ...]] | None = None,
+        routes: Mapping[tuple[str, str], Route] | None = None,
     ) -> None:
         """Prepares the table.
 
@@ -63,7 +64,7 @@ class NavTable:
         self.graph = graph
         self._here: dict[str, tuple[int, float, float, float]] = {}
         self._neighbours: dict[str, list[_Neighbour]] = {}
-        self._routes: dict[tuple[str, str], tuple[str, ...]] = {}
+        self._routes: dict[tuple[str, str], Route] = {}
         for (a, b), via in (routes or {}).items():
             self._routes[(a, b)] = tuple(via)
             self._routes.setdefault((b, a), tuple(via)[::-1])
@@ -73,8 +74,9 @@ class NavTable:
         """The polyline a body walks from ``a`` to neighbour ``b``, if not the straight line.
 
         Returns:
-            None when the edge is walked straight, else the camera positions ``(K, 3)`` of
-            the viewpoints its route passes (``a`` first, ``b`` last) and the route's length
+            None when the edge is walked straight, else the camera positions ``(K, 3)`` along
+            its route (``a`` first, ``b`` last; see
+            :func:`~havln_mj.scene.proxy.routes.route_camera_points`) and the route's length
             (3-D, metres).
         """
         if not self._routes:
@@ -84,7 +86,7 @@ class NavTable:
             via = self._routes.get((a, b))
             if via is None:
                 return None
-            points = np.array([self.graph.position(v) for v in via], dtype=float)
+            points = route_camera_points(self.graph, via)
             length = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
             path = self._paths[(a, b)] = (points, length)
         return path

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import json
 
 import numpy as np
 import pytest
@@ -13,9 +14,17 @@ from havln_mj.scene.boxes import BoxSet
 from havln_mj.scene.connectivity import parse_connectivity
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.proxy.build import ProxyParams, build_proxy, edge_walkability
-from havln_mj.scene.proxy.raster import cover_cells
-from havln_mj.scene.proxy.routes import crossings, read_routes, shortest_routes, write_routes
-from havln_mj.scene.proxy.walk import edge_grade, floor_point, path_fault
+from havln_mj.scene.proxy.raster import cover_cells, cover_rows
+from havln_mj.scene.proxy.routes import (
+    crossings,
+    read_routes,
+    route_camera_points,
+    route_floor_points,
+    shortest_routes,
+    write_routes,
+)
+from havln_mj.scene.proxy.stairs import candidate_flights
+from havln_mj.scene.proxy.walk import edge_grade, path_fault
 
 # Small and large, single- and multi-storey, scans whose graphs have several components, and
 # a four-storey stairwell with landings at every height (yqstnuAEVhm).
@@ -155,12 +164,60 @@ def test_a_steep_edge_is_left_undrawn_and_walked_by_its_route():
     g = _graph(floors, [("a", "b"), ("a", "c"), ("c", "d"), ("d", "b")])
     ab = next((a, b) for a, b, _ in g.edges() if {a, b} == {"a", "b"})
     assert edge_grade(g, *ab) > P.max_grade
-    strict = build_proxy(g)
-    assert strict.faults == {ab: "steep"} and strict.unwalkable == [ab]
     loose = build_proxy(g, ProxyParams(route_ratio=7.0))  # the detour is 6 times as long
+    assert loose.faults == {ab: "steep"}
     assert loose.routes == {ab: ("a", "c", "d", "b")} and loose.unwalkable == []
-    route = np.array([floor_point(g, v) for v in loose.routes[ab]])
-    assert path_fault(route, loose.boxes, P) is None
+    assert path_fault(route_floor_points(g, loose.routes[ab]), loose.boxes, P) is None
+    # Without a route short enough, the proxy draws a flight of its own for the edge.
+    strict = build_proxy(g)
+    assert strict.faults == {ab: "steep"} and strict.flights == [ab] and strict.unwalkable == []
+
+
+@pytest.mark.parametrize("rise", [0.6, 2.4, -3.0])
+def test_a_lone_steep_edge_gets_a_gentle_flight(rise):
+    # A line of sight up a turning stair with no other way between its storeys: the proxy
+    # draws a flight climbing at stair_grade at most, which a body walks.
+    g = _graph({"a": (0, 0, 0), "b": (0.5, 0.2, rise), "c": (-3, 0, 0), "d": (3.5, 0.2, rise)},
+               [("a", "b"), ("a", "c"), ("b", "d")])  # fmt: skip
+    ab = next((a, b) for a, b, _ in g.edges() if {a, b} == {"a", "b"})
+    proxy = build_proxy(g)
+    assert proxy.faults == {ab: "steep"} and proxy.flights == [ab] and proxy.unwalkable == []
+    route = proxy.routes[ab]
+    assert route[0] == ab[0] and route[-1] == ab[1]
+    assert all(not isinstance(s, str) for s in route[1:-1])
+    points = route_floor_points(g, route)
+    legs = np.diff(points, axis=0)
+    assert np.all(np.abs(legs[:, 2]) <= P.stair_grade * np.hypot(*legs[:, :2].T) + 1e-9)
+    assert path_fault(points, proxy.boxes, P) is None
+    # The other edges still walk straight.
+    assert len(proxy.faults) == 1
+
+
+def test_candidate_flights_join_the_ends_and_climb_gently_shortest_first():
+    a, b = np.array([0.0, 0.0, 0.0]), np.array([0.3, 0.4, 2.0])  # 0.5 m apart, 2 m up
+    flights = candidate_flights(a, b, P)
+    assert len(flights) > 16
+    lengths = []
+    for flight in flights:
+        np.testing.assert_allclose(flight[0], a, atol=1e-12)
+        np.testing.assert_allclose(flight[-1], b, atol=1e-9)
+        legs = np.diff(flight, axis=0)
+        run = np.hypot(*legs[:, :2].T)
+        assert np.all(np.abs(legs[:, 2]) <= P.stair_grade * run + 1e-9)
+        assert np.all(legs[:, 2] >= -1e-12)  # climbs all the way
+        lengths.append(run.sum())
+    assert lengths[0] == pytest.approx(min(lengths))  # shortest first
+    assert min(lengths) >= 2.0 / P.stair_grade - 1e-9
+
+
+def test_route_stops_may_be_floor_points_with_cameras_at_their_ends_height():
+    g = _graph({"a": (0, 0, 0), "b": (4, 0, 2.0)}, [("a", "b")])
+    route = ("a", (2.0, 3.0, 1.0), "b")
+    floors = route_floor_points(g, route)
+    np.testing.assert_allclose(floors, [[0, 0, 0], [2, 3, 1], [4, 0, 2]])
+    cameras = route_camera_points(g, route)
+    np.testing.assert_allclose(cameras[[0, 2]], [g.position("a"), g.position("b")])
+    np.testing.assert_allclose(cameras[1], [2, 3, 2.5])  # both cameras stand 1.5 m up
 
 
 # ------------------------------------------------------------- drawing near other floors
@@ -196,10 +253,18 @@ def test_a_floor_over_the_side_of_a_corridor_keeps_out_of_its_band(offset):
 
 
 def test_routes_file_round_trip_and_checks(tmp_path):
-    routes = {("a", "b"): ("a", "c", "b"), ("d", "e"): ("d", "f", "g", "e")}
+    routes = {
+        ("a", "b"): ("a", "c", "b"),
+        ("d", "e"): ("d", "f", "g", "e"),
+        ("h", "i"): ("h", (0.5, -1.25, 2.0), (1.0, 0.0, 2.5), "i"),  # a flight
+    }
     path = tmp_path / "routes.json"
     write_routes(path, routes)
     assert read_routes(path) == routes
+    for stop in ([1.0, 2.0], [1.0, 2.0, float("nan")], {"x": 1}):
+        path.write_text(json.dumps({"routes": [{"edge": ["a", "b"], "via": ["a", stop, "b"]}]}))
+        with pytest.raises(MalformedDataError, match="not a valid routes file"):
+            read_routes(path)
     assert read_routes(tmp_path / "absent.json") == {}
     path.write_text('{"routes": [{"edge": ["a", "b"], "via": ["a", "b"]}]}')
     with pytest.raises(MalformedDataError, match="a-b"):
@@ -241,6 +306,21 @@ def test_cover_cells_covers_each_cell_once_with_its_key_and_only_spare_cells_bes
     assert len(cover_cells(disc, disc < 0)) == 1
 
 
+def test_cover_rows_covers_each_keyed_cell_once_along_rows():
+    rng = np.random.default_rng(4)
+    key = np.where(rng.random((25, 30)) < 0.6, rng.integers(0, 3, (25, 30)), -1)
+    rects = cover_rows(key)
+    cover = np.zeros(key.shape, int)
+    for r0, r1, c0, c1, k in rects:
+        assert r1 == r0 + 1 and np.all(key[r0, c0:c1] == k)
+        cover[r0, c0:c1] += 1
+    np.testing.assert_array_equal(cover, key >= 0)
+    # A maximal run is one rectangle: each ends where the key changes.
+    assert len(rects) == int(
+        np.sum((key >= 0) & (np.pad(key, ((0, 0), (1, 0)), constant_values=-1)[:, :-1] != key))
+    )
+
+
 # ------------------------------------------------------------------------ the real graphs
 
 
@@ -260,19 +340,23 @@ def test_edges_are_walkable_straight_or_by_route(proxies, scan):
     assert proxy.faults == checked
     straight = [(a, b) for a, b, _ in graph.edges() if (a, b) not in proxy.faults]
     for (a, b), via in proxy.routes.items():
-        # Only edges that provably cannot be drawn straight are routed...
+        points = route_floor_points(graph, via)
+        assert path_fault(points, proxy.boxes, P) is None  # the whole route passes the check
+        if (a, b) in proxy.flights:
+            # A flight drawn for the edge climbs at stair_grade at most.
+            legs = np.diff(points, axis=0)
+            assert np.all(np.abs(legs[:, 2]) <= P.stair_grade * np.hypot(*legs[:, :2].T) + 1e-9)
+            continue
+        # Only edges that provably cannot be drawn straight are routed through viewpoints...
         assert edge_grade(graph, a, b) > P.max_grade or (a, b) in proxy.crossing
         # ...over edges walked straight, no longer than route_ratio times the edge...
         links = {frozenset(link) for link in itertools.pairwise(via)}
         assert links <= {frozenset(e) for e in straight}
         length = sum(np.linalg.norm(graph.position(u) - graph.position(v)) for u, v in links)
         assert length <= P.route_ratio * np.linalg.norm(graph.position(a) - graph.position(b))
-        # ...and the whole route passes the check.
-        assert path_fault(np.array([floor_point(graph, v) for v in via]), proxy.boxes, P) is None
     assert proxy.unwalkable == [e for e in proxy.faults if e not in proxy.routes]
-    # Over all 90 graphs (benchmarks/bench_proxies.py) 0.4 % of edges are walkable neither
-    # way, most of them steeper than 45°; the single-storey samples are clean, and so is the
-    # stairwell.
+    # Over all 90 graphs (benchmarks/bench_proxies.py) 0.05 % of edges are walkable neither
+    # way; the single-storey samples are clean, and so is the stairwell.
     if scan in ("17DRP5sb8fy", "gZ6f7yhEvPG", "pLe4wQe7qrG", "PuKPg4mmafe", "yqstnuAEVhm"):
         assert proxy.unwalkable == []
 

@@ -13,7 +13,11 @@ from havln_mj.run import main as run_main
 from havln_mj.scene.connectivity import Connectivity, write_connectivity
 from havln_mj.scene.mesh import boxes_to_parts, parts_to_trimesh
 from havln_mj.scene.procedural.generate import generate_house
+from havln_mj.scene.proxy.params import ProxyParams
+from havln_mj.scene.proxy.routes import route_floor_points
+from havln_mj.scene.proxy.walk import path_fault
 from havln_mj.scene.scan import load_scan
+from havln_mj.sim.navigation import NavTable
 
 SCAN = "TestHouse01"  # an 11-character id, like Matterport's
 
@@ -108,6 +112,24 @@ def test_a_proxy_stores_the_routes_of_edges_it_cannot_draw_straight(shared_data)
     assert scan.route(b, a) == via[::-1] and scan.route(a, via[1]) is None
     for u, v in itertools.pairwise(via):
         assert v in scan.graph.neighbors(u)
+
+
+def test_a_proxy_draws_a_flight_for_a_steep_edge_the_graph_cannot_route(shared_data):
+    # D7G3Y4RVNrH: a line of sight up a turning stair climbs 0.79 m over 0.62 m (52°), and
+    # the graph's other way round is 2.5 times as long: the proxy draws a flight for it.
+    scan = load_scan("D7G3Y4RVNrH", connectivity_dir=shared_data / "mp3d_connectivity")
+    assert scan.meta["unwalkable_edges"] == 0 and scan.meta["edges_by_flight"] == 1
+    (((a, b), via),) = scan.routes.items()
+    assert via[0] == a and via[-1] == b
+    assert all(isinstance(s, tuple) and len(s) == 3 for s in via[1:-1])
+    points = route_floor_points(scan.graph, via)
+    assert path_fault(points, scan.boxes, ProxyParams()) is None
+    # The point body's move along it lasts the flight's length, in either direction.
+    table = NavTable(scan.scene_id, scan.graph, scan.routes)
+    cameras, length = table.path(b, a)
+    np.testing.assert_allclose(cameras[[0, -1]], [scan.graph.position(b), scan.graph.position(a)])
+    straight = float(np.linalg.norm(scan.graph.position(a) - scan.graph.position(b)))
+    assert length > 1.2 * straight
 
 
 def test_proxy_is_replaced_once_the_mesh_appears(tmp_path):

@@ -157,18 +157,21 @@ def test_geodesic_distance_from_the_robot(graph, edge):
     assert d1 == pytest.approx(d0 - 0.5, abs=0.1)  # the robot walked half a metre toward b
 
 
-def test_an_edge_walked_by_a_route_passes_its_viewpoints(graph):
+@pytest.mark.parametrize("by", ["viewpoint", "floor point"])
+def test_an_edge_walked_by_a_route_passes_its_stops(graph, by):
     # Give one proc-0 edge a made-up route through a common neighbour, as graph proxies do
-    # for a line of sight across a stairwell: the GO1 walks through that neighbour.
+    # for a line of sight across a stairwell (through the viewpoint, or through its floor
+    # point as a flight drawn for the edge is stored): the GO1 walks through that neighbour.
     a, b, c = next(
         (u, v, w)
         for u, v, _ in graph.edges()
         for w in graph.neighbors(u)
         if w in graph.neighbors(v) and w not in (u, v)
     )
-    scan = dataclasses.replace(load_scan(SCAN), routes={(a, b): (a, c, b)})
-    world = LeggedWorld(scan, WorldOptions(collision="boxes"), NO_CROWD, LeggedOptions())
     floor = {v: np.append(graph.position(v)[:2], graph.floor_z(v)) for v in (a, b, c)}
+    stop = c if by == "viewpoint" else tuple(floor[c])
+    scan = dataclasses.replace(load_scan(SCAN), routes={(a, b): (a, stop, b)})
+    world = LeggedWorld(scan, WorldOptions(collision="boxes"), NO_CROWD, LeggedOptions())
     agent = LeggedAgent(world)
     agent.place(graph.position(a), graph.floor_z(a), 0.0, 0.0)
     np.testing.assert_array_equal(world.waypoints(agent.position(), floor[b]), [floor[c]])

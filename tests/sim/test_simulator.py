@@ -18,6 +18,7 @@ from havln_mj.errors import (
     UnknownViewpointError,
 )
 from havln_mj.frames import heading_to
+from havln_mj.scene.proxy.routes import route_camera_points
 from havln_mj.scene.scan import load_scan
 from havln_mj.sim import scenes
 from havln_mj.sim.egocentric import EgoAction
@@ -224,25 +225,28 @@ def _detour(graph):
     raise AssertionError("proc-0 has no such triangle")
 
 
-@pytest.fixture()
-def routed(graph, monkeypatch):
-    """proc-0 with one edge a-b walked by a route through c, as graph proxies store them."""
+@pytest.fixture(params=["viewpoint", "floor point"])
+def routed(graph, monkeypatch, request):
+    """proc-0 with one edge a-b walked by a route through c, as graph proxies store them:
+    through the viewpoint c, or (a flight drawn for the edge) through c's floor point."""
     a, b, c = _detour(graph)
+    stop = c if request.param == "viewpoint" else (*graph.position(c)[:2], graph.floor_z(c))
     real = scenes.load_scan
     monkeypatch.setattr(
         scenes,
         "load_scan",
         lambda *args, **kwargs: dataclasses.replace(
-            real(*args, **kwargs), routes={(a, b): (a, c, b)}
+            real(*args, **kwargs), routes={(a, b): (a, stop, b)}
         ),
     )
-    return a, b, c
+    return a, b, c, stop
 
 
 def test_a_routed_edge_takes_its_routes_time_and_passes_its_people(graph, routed):
-    a, b, c = routed
-    pa, pb, pc = (graph.position(v) for v in (a, b, c))
-    route = float(np.linalg.norm(pc - pa) + np.linalg.norm(pb - pc))
+    a, b, c, stop = routed
+    pa, pc = graph.position(a), graph.position(c)
+    points = route_camera_points(graph, (a, stop, b))  # c's camera, or c's floor point raised
+    route = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
     person = pc - [0.0, 0.0, 1.0]  # on the route, over 1.5 m from the straight line
     for start, end in ((a, b), (b, a)):  # the route is walked backwards from b
         sim = _sim(speed=0.5, humans=lambda scan, g, rng: _Standing([person]))

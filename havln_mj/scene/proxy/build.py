@@ -12,7 +12,9 @@ Every edge is then checked for a walking body (:mod:`~havln_mj.scene.proxy.walk`
 is a walk: an edge up a turning stair is too steep to walk straight, and two edges whose
 straight corridors cross at different heights cannot both be drawn. Such edges are walked by
 a *route* over other edges instead (:mod:`~havln_mj.scene.proxy.routes`), stored in the
-proxy and followed by the legged robot; edges left with neither are reported.
+proxy and followed by the robot. Where the graph has no such route, the proxy draws a flight
+of its own for the edge (:mod:`~havln_mj.scene.proxy.stairs`); edges left with none of these
+are reported.
 """
 
 from __future__ import annotations
@@ -26,20 +28,25 @@ from havln_mj.scene.boxes import BoxSet
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.proxy.draw import layer_boxes
 from havln_mj.scene.proxy.layers import (
+    Disc,
     Edge,
     Layer,
+    Leg,
     clear_overhangs,
+    graph_elements,
     rasterise,
     separate_components,
 )
 from havln_mj.scene.proxy.params import ProxyParams
 from havln_mj.scene.proxy.raster import Grid
-from havln_mj.scene.proxy.routes import crossings, shortest_routes
+from havln_mj.scene.proxy.routes import Route, crossings, route_floor_points, shortest_routes
+from havln_mj.scene.proxy.stairs import choose_flight, flight_legs
 from havln_mj.scene.proxy.walk import CAUSES, edge_grade, floor_point, path_fault
 
 __all__ = ["Proxy", "ProxyParams", "build_proxy", "edge_walkability"]
 
 _ROUNDS = 4  # most redraws after leaving routed edges out
+_FLIGHT_MARGIN = 1.0  # metres: a flight this near a path it broke is dropped
 
 
 @dataclass(frozen=True)
@@ -53,8 +60,9 @@ class Proxy:
         faults: Edges a body cannot walk straight, with the cause (one of ``walk.CAUSES``).
         crossing: Edges whose straight corridor cannot coexist with another edge's (see
             :func:`~havln_mj.scene.proxy.routes.crossings`).
-        routes: Edges walked by a route instead: ``(a, ..., b)`` through other viewpoints,
-            each link an edge walkable straight.
+        routes: Edges walked by a route instead, ``(a, ..., b)``: through other viewpoints,
+            each link an edge walkable straight, or along a flight drawn for the edge, through
+            floor points (see :mod:`~havln_mj.scene.proxy.routes`).
     """
 
     boxes: BoxSet
@@ -62,12 +70,17 @@ class Proxy:
     free: list[np.ndarray]
     faults: dict[Edge, str]
     crossing: frozenset[Edge]
-    routes: dict[Edge, tuple[str, ...]]
+    routes: dict[Edge, Route]
 
     @property
     def unwalkable(self) -> list[Edge]:
         """Edges walkable neither straight nor by route."""
         return [e for e in self.faults if e not in self.routes]
+
+    @property
+    def flights(self) -> list[Edge]:
+        """Routed edges walked along a flight drawn for them."""
+        return [e for e, via in self.routes.items() if not all(isinstance(s, str) for s in via)]
 
 
 def build_proxy(graph: NavGraph, params: ProxyParams | None = None) -> Proxy:
@@ -79,7 +92,8 @@ def build_proxy(graph: NavGraph, params: ProxyParams | None = None) -> Proxy:
     proxy is redrawn (a few rounds). Links of a route stay drawn, and of two crossing edges at
     most one is left out per round. Finally each edge that fails straight and is steep or
     crossing gets its shortest route, when one is at most ``route_ratio`` times as long and
-    passes the check as a whole.
+    passes the check as a whole. An edge left with no route gets a flight of its own when
+    one fits (see :mod:`~havln_mj.scene.proxy.stairs`).
     """
     p = params or ProxyParams()
     xy = np.array([graph.position(v)[:2] for v in graph.nodes])
@@ -94,7 +108,8 @@ def build_proxy(graph: NavGraph, params: ProxyParams | None = None) -> Proxy:
     kept: set[Edge] = set()  # links of routes: stay drawn
     for rounds in range(_ROUNDS + 1):
         drawn = [e for e in drawable if e not in left_out]
-        layers, boxes = _draw(graph, drawn, grid, p, comp_of)
+        discs, legs = graph_elements(graph, drawn, comp_of)
+        layers, boxes = _draw(discs, legs, grid, p)
         faults = _faults(graph, edges, boxes, p)
         if rounds == _ROUNDS:
             break
@@ -122,22 +137,115 @@ def build_proxy(graph: NavGraph, params: ProxyParams | None = None) -> Proxy:
     crossing = frozenset(conflicts)
     walkable = [e for e in edges if e not in faults]
     wanted = [e for e in faults if e in steep or e in crossing]
-    routes = {
+    routes: dict[Edge, Route] = {
         e: route
         for e, route in shortest_routes(graph, walkable, wanted, p.route_ratio).items()
-        if path_fault(np.array([floor_point(graph, v) for v in route]), boxes, p) is None
+        if path_fault(route_floor_points(graph, route), boxes, p) is None
     }
+    flights = _choose_flights(graph, edges, faults, routes, discs, legs, grid, p, comp_of)
+    if flights:
+        layers, boxes, faults, flights = _draw_flights(
+            graph, edges, faults, routes, flights, discs, legs, grid, p, comp_of
+        )
+    routes = {e: r for e, r in routes.items() if e in faults}  # a flight may free an edge
+    for (a, b), flight in flights.items():
+        if (a, b) in faults:
+            routes[(a, b)] = (a, *(tuple(map(float, q)) for q in flight[1:-1]), b)
     return Proxy(boxes, grid, [layer.free for layer in layers], faults, crossing, routes)
 
 
 def _draw(
-    graph: NavGraph, edges: list[Edge], grid: Grid, p: ProxyParams, comp_of: dict[str, int]
+    discs: list[Disc], legs: list[Leg], grid: Grid, p: ProxyParams, draft: bool = False
 ) -> tuple[list[Layer], BoxSet]:
-    layers = rasterise(graph, edges, grid, p, comp_of)
+    layers = rasterise(discs, legs, grid, p)
     clear_overhangs(layers, p)
     for layer in layers:
         separate_components(layer)
-    return layers, layer_boxes(layers, grid, p)
+    return layers, layer_boxes(layers, grid, p, draft)
+
+
+def _straight(graph: NavGraph, edge: Edge) -> np.ndarray:
+    return np.array([floor_point(graph, edge[0]), floor_point(graph, edge[1])])
+
+
+def _choose_flights(
+    graph: NavGraph,
+    edges: list[Edge],
+    faults: dict[Edge, str],
+    routes: dict[Edge, Route],
+    discs: list[Disc],
+    legs: list[Leg],
+    grid: Grid,
+    p: ProxyParams,
+    comp_of: dict[str, int],
+) -> dict[Edge, np.ndarray]:
+    """A flight for each edge walkable neither straight nor by route, where one fits."""
+    paths = [_straight(graph, e) for e in edges if e not in faults]
+    paths += [route_floor_points(graph, r) for r in routes.values()]
+    extra: list[Leg] = []
+    flights: dict[Edge, np.ndarray] = {}
+    for a, b in (e for e in faults if e not in routes):
+        flight = choose_flight(
+            floor_point(graph, a),
+            floor_point(graph, b),
+            comp_of[a],
+            discs,
+            legs + extra,
+            paths,
+            grid,
+            lambda d, g, w: _draw(d, g, w, p, draft=True)[1],
+            p,
+        )
+        if flight is not None:
+            flights[(a, b)] = flight
+            extra += flight_legs(flight, comp_of[a])
+            paths.append(flight)
+    return flights
+
+
+def _draw_flights(
+    graph: NavGraph,
+    edges: list[Edge],
+    faults: dict[Edge, str],
+    routes: dict[Edge, Route],
+    flights: dict[Edge, np.ndarray],
+    discs: list[Disc],
+    legs: list[Leg],
+    grid: Grid,
+    p: ProxyParams,
+    comp_of: dict[str, int],
+) -> tuple[list[Layer], BoxSet, dict[Edge, str], dict[Edge, np.ndarray]]:
+    """Redraws the whole proxy with ``flights``, dropping those near a path that broke.
+
+    A path broke when an edge walkable straight before is not, a route no longer walks, or a
+    flight is not walked itself. Flights within ``_FLIGHT_MARGIN`` of a broken path are
+    dropped (all of them, if that leaves none near) and the proxy redrawn until none breaks.
+    """
+    flights = dict(flights)
+    route_paths = [route_floor_points(graph, r) for r in routes.values()]
+    while True:
+        extra = [g for e, f in flights.items() for g in flight_legs(f, comp_of[e[0]])]
+        layers, boxes = _draw(discs, legs + extra, grid, p)
+        new_faults = _faults(graph, edges, boxes, p)
+        broken = [_straight(graph, e) for e in new_faults if e not in faults]
+        broken += [q for q in route_paths if path_fault(q, boxes, p) is not None]
+        broken += [f for f in flights.values() if path_fault(f, boxes, p) is not None]
+        if not broken:
+            return layers, boxes, new_faults, flights
+        near = {e for e, f in flights.items() if any(_near(f, q) for q in broken)}
+        flights = {e: f for e, f in flights.items() if e not in (near or flights)}
+        if not flights:
+            layers, boxes = _draw(discs, legs, grid, p)
+            return layers, boxes, faults, flights
+
+
+def _near(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether the plan bounding boxes of two polylines come within ``_FLIGHT_MARGIN``."""
+    m = _FLIGHT_MARGIN
+    return bool(
+        np.all(a[:, :2].min(0) - m <= b[:, :2].max(0))
+        and np.all(b[:, :2].min(0) - m <= a[:, :2].max(0))
+    )
 
 
 def _faults(graph: NavGraph, edges: list[Edge], boxes: BoxSet, p: ProxyParams) -> dict[Edge, str]:

@@ -16,7 +16,7 @@ from scipy.ndimage import binary_dilation, maximum_filter
 from havln_mj.scene.boxes import BoxSet
 from havln_mj.scene.proxy.layers import FLOOR_QUANTUM, Layer
 from havln_mj.scene.proxy.params import ProxyParams
-from havln_mj.scene.proxy.raster import Grid, cover_cells, neighbours
+from havln_mj.scene.proxy.raster import Grid, cover_cells, cover_rows, neighbours
 
 FLOOR_RGBA = (0.62, 0.55, 0.45, 1.0)
 STAIR_RGBA = (0.50, 0.42, 0.34, 1.0)
@@ -28,13 +28,15 @@ _EPS = 1e-6  # metres
 _WALL_Q = 0.1  # wall top quantum under another layer's floor
 
 
-def layer_boxes(layers: list[Layer], grid: Grid, p: ProxyParams) -> BoxSet:
+def layer_boxes(layers: list[Layer], grid: Grid, p: ProxyParams, draft: bool = False) -> BoxSet:
     """Floor, stair and wall boxes of the layers.
 
     Boxes may reach over a layer's walls and past them where no other layer walks near:
     nothing stands there, and boxes that run on there instead of tracing the ragged outlines
     of discs and corridors are fewer. Floor cells of one height share boxes; within a layer
     no two floor boxes cover the same free cell (each would be one more contact to solve).
+    A ``draft`` covers each row's runs of cells instead: the same cells, quickly, in many more
+    boxes, none past the cells it covers (for trying a drawing out, not for keeping).
     """
     sets: list[BoxSet] = []
     frees = [layer.free for layer in layers]
@@ -58,12 +60,13 @@ def layer_boxes(layers: list[Layer], grid: Grid, p: ProxyParams) -> BoxSet:
         spare = ~free & ~near_other
         top = _top(np.nan_to_num(height))
         under = _underside(top, layers, p)
-        lo, hi, rects = _cell_boxes(grid, free, under, top, spare)
+        lo, hi, rects = _cell_boxes(grid, free, under, top, spare, draft)
         # A box is stairs where most of its cells are.
         stairs = _rect_sums(free & layer.stair, rects) * 2 > _rect_sums(free, rects)
         sets.append(_set(lo[~stairs], hi[~stairs], "floor", "floor", FLOOR_RGBA))
         sets.append(_set(lo[stairs], hi[stairs], "floor", "stairs", STAIR_RGBA))
-        sets.append(_set(*_cell_boxes(grid, wall, z0, z1, spare)[:2], "wall", "wall", WALL_RGBA))
+        walls = _cell_boxes(grid, wall, z0, z1, spare, draft)[:2]
+        sets.append(_set(*walls, "wall", "wall", WALL_RGBA))
     return BoxSet(
         np.concatenate([b.lo for b in sets]).reshape(-1, 3),
         np.concatenate([b.hi for b in sets]).reshape(-1, 3),
@@ -149,11 +152,17 @@ def _neighbour_extremes(height: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _cell_boxes(
-    grid: Grid, mask: np.ndarray, z0: np.ndarray, z1: np.ndarray, spare: np.ndarray
+    grid: Grid,
+    mask: np.ndarray,
+    z0: np.ndarray,
+    z1: np.ndarray,
+    spare: np.ndarray,
+    draft: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Boxes covering the cells of ``mask``, cell (r, c) spanning ``z0[r, c]..z1[r, c]``.
 
-    Cells with equal spans share boxes, which may also stand on ``spare`` cells.
+    Cells with equal spans share boxes, which may also stand on ``spare`` cells (a ``draft``
+    covers runs along rows instead, see :func:`layer_boxes`).
 
     Returns:
         lo, hi and the (row0, row1, col0, col1) cell rectangle of each box.
@@ -161,7 +170,8 @@ def _cell_boxes(
     spans, inverse = np.unique(np.stack([z0[mask], z1[mask]], axis=1), axis=0, return_inverse=True)
     key = np.full(mask.shape, -1, dtype=np.int64)
     key[mask] = inverse.ravel()
-    rects = np.array(cover_cells(key, spare), dtype=float).reshape(-1, 5)
+    cover = cover_rows(key) if draft else cover_cells(key, spare)
+    rects = np.array(cover, dtype=float).reshape(-1, 5)
     s = grid.cell
     lo = np.column_stack(
         [grid.x0 + rects[:, 2] * s, grid.y0 + rects[:, 0] * s, spans[rects[:, 4].astype(int), 0]]

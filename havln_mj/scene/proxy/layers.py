@@ -14,6 +14,7 @@ lower keeps the cells its bodies reach unless the higher one's path runs through
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -180,36 +181,54 @@ def _lower_wins(low: np.ndarray, high: np.ndarray, p: ProxyParams) -> np.ndarray
     return out
 
 
-def rasterise(
-    graph: NavGraph, edges: list[Edge], grid: Grid, p: ProxyParams, comp_of: dict[str, int]
-) -> list[Layer]:
-    """The layers of free floor of the viewpoints and ``edges``, lowest elements first."""
+class Disc(NamedTuple):
+    """A viewpoint's free floor: a disc of ``viewpoint_radius`` at its floor height."""
+
+    xy: np.ndarray
+    floor: float
+    comp: int
+
+
+class Leg(NamedTuple):
+    """A straight walk's free floor: a corridor from ``a`` (floor ``fa``) to ``b`` (``fb``).
+
+    The corridor is ``corridor_half_width`` wide on each side; its height is interpolated.
+    """
+
+    a: np.ndarray
+    b: np.ndarray
+    fa: float
+    fb: float
+    comp: int
+
+
+def graph_elements(
+    graph: NavGraph, edges: list[Edge], comp_of: dict[str, int]
+) -> tuple[list[Disc], list[Leg]]:
+    """The discs of all viewpoints and the legs of ``edges``."""
+    discs = [Disc(graph.position(v)[:2], graph.floor_z(v), comp_of[v]) for v in graph.nodes]
+    legs = [
+        Leg(graph.position(a)[:2], graph.position(b)[:2], graph.floor_z(a), graph.floor_z(b),
+            comp_of[a])
+        for a, b in edges
+    ]  # fmt: skip
+    return discs, legs
+
+
+def rasterise(discs: list[Disc], legs: list[Leg], grid: Grid, p: ProxyParams) -> list[Layer]:
+    """The layers of free floor of ``discs`` and ``legs``, lowest elements first."""
     layers: list[Layer] = []
-    nodes = sorted(graph.nodes, key=graph.floor_z)
-    for vp in nodes:
-        xy, f = graph.position(vp)[:2], graph.floor_z(vp)
+    for xy, f, comp in sorted(discs, key=lambda d: d.floor):
         window, d, cheb = disc(grid, xy, p.viewpoint_radius)
-        _place(
-            layers,
-            grid.shape,
-            window,
-            d <= p.viewpoint_radius,
-            np.full(d.shape, f),
-            d,
-            cheb,
-            p.viewpoint_radius,
-            comp_of[vp],
-            False,
-            p,
-        )
-    for a, b in sorted(edges, key=lambda e: min(graph.floor_z(e[0]), graph.floor_z(e[1]))):
-        fa, fb = graph.floor_z(a), graph.floor_z(b)
-        pa, pb = graph.position(a)[:2], graph.position(b)[:2]
+        mask, height = d <= p.viewpoint_radius, np.full(d.shape, f)
+        reach = p.viewpoint_radius
+        _place(layers, grid.shape, window, mask, height, d, cheb, reach, comp, False, p)
+    for pa, pb, fa, fb, comp in sorted(legs, key=lambda g: min(g.fa, g.fb)):
         window, d, cheb, t = corridor(grid, pa, pb, p.corridor_half_width)
         stair = abs(fb - fa) > p.stair_rise
         mask, height = d <= p.corridor_half_width, fa + t * (fb - fa)
         reach = p.corridor_half_width
-        _place(layers, grid.shape, window, mask, height, d, cheb, reach, comp_of[a], stair, p)
+        _place(layers, grid.shape, window, mask, height, d, cheb, reach, comp, stair, p)
     return layers
 
 

@@ -33,7 +33,10 @@ class ProxyParams:
             stretch ``grade_window`` long: 1.0 is 45°, steeper than any stair a building
             code allows. An edge steeper end to end is never drawn.
         grade_window: Length of the stretches ``max_grade`` is measured over.
-        route_ratio: A route may be at most this many times as long as its edge.
+        route_ratio: A route through other viewpoints may be at most this many times as
+            long as its edge.
+        stair_grade: Steepest climb of a flight drawn for an edge the graph cannot route
+            (rise over run; 0.75 is 37°, a common stair).
     """
 
     cell: float = 0.1
@@ -51,6 +54,7 @@ class ProxyParams:
     max_grade: float = 1.0
     grade_window: float = 1.0
     route_ratio: float = 1.5
+    stair_grade: float = 0.75
 
     @property
     def reach_cells(self) -> int:
@@ -77,3 +81,8 @@ class ProxyParams:
             )
         if not self.max_grade > 0.0:
             raise InvalidArgumentError(f"ProxyParams.max_grade={self.max_grade!r} must be > 0")
+        if not 0.0 < self.stair_grade <= self.max_grade:
+            raise InvalidArgumentError(
+                f"ProxyParams.stair_grade={self.stair_grade!r}; valid: > 0 and at most "
+                f"max_grade = {self.max_grade}"
+            )

@@ -12,7 +12,12 @@ turning stair, the straight line is no walk at all:
 
 Such an edge is walked by a *route* instead: a chain of other edges, each walkable straight,
 no longer than ``route_ratio`` times the edge. The builder leaves routed edges out of the
-drawing, so they no longer take floor from the edges they cross.
+drawing, so they no longer take floor from the edges they cross. Where the graph has no such
+chain, the builder draws a flight of its own for the edge (:mod:`~havln_mj.scene.proxy.stairs`):
+its route passes floor points, not viewpoints.
+
+A route is a tuple of *stops*, the edge's ends first and last: a stop is a viewpoint id or a
+floor point ``(x, y, floor_z)``.
 """
 
 from __future__ import annotations
@@ -32,6 +37,32 @@ from havln_mj.scene.proxy.params import ProxyParams
 from havln_mj.scene.proxy.walk import floor_point, samples
 
 Edge = tuple[str, str]
+Stop = str | tuple[float, float, float]
+Route = tuple[Stop, ...]
+
+
+def route_floor_points(graph: NavGraph, route: Route) -> np.ndarray:
+    """(K, 3) floor points of a route's stops."""
+    return np.array(
+        [floor_point(graph, s) if isinstance(s, str) else s for s in route], dtype=float
+    )
+
+
+def route_camera_points(graph: NavGraph, route: Route) -> np.ndarray:
+    """(K, 3) camera positions along a route.
+
+    A viewpoint's own position, else the floor point raised by the camera height interpolated
+    between the route's ends (by horizontal distance).
+    """
+    floors = route_floor_points(graph, route)
+    run = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(floors[:, :2], axis=0).T))])
+    ends = [graph.position(route[k])[2] - floors[k, 2] for k in (0, -1)]
+    lift = np.interp(run, [0.0, max(run[-1], 1e-9)], ends)
+    out = floors + np.column_stack([np.zeros((len(floors), 2)), lift])
+    for k, stop in enumerate(route):
+        if isinstance(stop, str):
+            out[k] = graph.position(stop)
+    return out
 
 
 def crossings(graph: NavGraph, edges: list[Edge], p: ProxyParams) -> dict[Edge, set[Edge]]:
@@ -116,13 +147,19 @@ def shortest_routes(
     return routes
 
 
-def write_routes(path: Path, routes: dict[Edge, tuple[str, ...]]) -> None:
-    """Writes ``routes.json``: each routed edge with the viewpoints its route passes."""
-    entries = [{"edge": list(edge), "via": list(via)} for edge, via in routes.items()]
+def write_routes(path: Path, routes: dict[Edge, Route]) -> None:
+    """Writes ``routes.json``: each routed edge with the stops its route passes.
+
+    Stops are viewpoint ids, or floor points as ``[x, y, floor_z]``.
+    """
+    entries = [
+        {"edge": list(edge), "via": [s if isinstance(s, str) else [*map(float, s)] for s in via]}
+        for edge, via in routes.items()
+    ]
     atomic_write_json(path, {"routes": entries}, indent=1)
 
 
-def read_routes(path: Path) -> dict[Edge, tuple[str, ...]]:
+def read_routes(path: Path) -> dict[Edge, Route]:
     """Reads ``routes.json`` (empty when the file is absent).
 
     Raises:
@@ -132,15 +169,27 @@ def read_routes(path: Path) -> dict[Edge, tuple[str, ...]]:
         return {}
     try:
         entries = json.loads(path.read_text(encoding="utf-8"))["routes"]
-        routes = {
-            (str(e["edge"][0]), str(e["edge"][1])): tuple(map(str, e["via"])) for e in entries
-        }
-    except (json.JSONDecodeError, KeyError, TypeError, IndexError) as exc:
+        routes = {(str(e["edge"][0]), str(e["edge"][1])): _stops(e["via"]) for e in entries}
+    except (json.JSONDecodeError, KeyError, TypeError, IndexError, ValueError) as exc:
         raise MalformedDataError(f"{path}: not a valid routes file ({exc!r})") from exc
     for (a, b), via in routes.items():
         if len(via) < 3 or via[0] != a or via[-1] != b:
             raise MalformedDataError(
                 f"{path}: the route of edge {a}-{b} must run from {a} to {b} through at least "
-                f"one other viewpoint; got {list(via)}"
+                f"one other stop; got {list(via)}"
             )
     return routes
+
+
+def _stops(via: list) -> Route:
+    """A route's stops from JSON: strings, or lists of three finite numbers."""
+    out: list[Stop] = []
+    for s in via:
+        if isinstance(s, str):
+            out.append(s)
+            continue
+        x, y, z = (float(c) for c in s)  # ValueError unless three numbers
+        if not np.isfinite([x, y, z]).all():
+            raise ValueError(f"stop {s!r} is not finite")
+        out.append((x, y, z))
+    return tuple(out)

@@ -1,0 +1,153 @@
+"""Flights of its own for an edge that neither its straight corridor nor the graph serves.
+
+An edge up a turning stair climbs too steeply to walk straight, and where the graph has no
+other way between its viewpoints (a lone line of sight between two storeys) the proxy draws
+one: a *flight* from one viewpoint's floor to the other's, long enough to climb at
+``stair_grade`` at most, as a dogleg (out to a turning point, then on to the far end) or a
+U-turn (out, across, and back). An edge blocked where its corridor crosses another's gets a
+dogleg around the crossing the same way.
+
+Candidate flights are tried shortest first, in 16 directions, each drawn with the building
+around it in a window (only the elements near it, so a try costs a few milliseconds, not a
+whole redraw). A flight is taken when a body walks it and every path that walked before still
+walks: straight edges and routes near it. The whole proxy is then redrawn with the flights
+taken and checked again; a flight near a path that broke there is dropped.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from havln_mj.scene.boxes import BoxSet
+from havln_mj.scene.proxy.layers import Disc, Leg
+from havln_mj.scene.proxy.params import ProxyParams
+from havln_mj.scene.proxy.raster import Grid
+from havln_mj.scene.proxy.walk import path_fault
+
+Draw = Callable[[list[Disc], list[Leg], Grid], BoxSet]
+
+_DIRECTIONS = 16
+_LENGTHS = (1.05, 1.25)  # flight lengths tried, times the shortest that climbs gently
+_MIN_ARM = 0.3  # metres: shortest arm of a U-turn
+_MARGIN = 1.5  # metres: paths this near a flight are checked; building this near is drawn
+
+
+def candidate_flights(a: np.ndarray, b: np.ndarray, p: ProxyParams) -> list[np.ndarray]:
+    """Polylines of floor points from ``a`` to ``b`` a body could climb, shortest first.
+
+    Each is a dogleg ``a → m → b`` or a U-turn ``a → a + L·u → b + L·u → b`` (also one that
+    first steps aside, so its flights are a corridor apart) for 16 directions ``u``, at
+    horizontal lengths ``_LENGTHS`` times the shortest that climbs at ``stair_grade``, and
+    never shorter than the edge itself. Floors rise evenly with horizontal distance along
+    the polyline.
+    """
+    v = b[:2] - a[:2]
+    d = float(np.hypot(*v))
+    rise = float(b[2] - a[2])
+    base = max(d, abs(rise) / p.stair_grade)
+    out: list[tuple[float, np.ndarray]] = []
+    for factor in _LENGTHS:
+        need = base * factor
+        for k in range(_DIRECTIONS):
+            angle = 2 * np.pi * k / _DIRECTIONS
+            u = np.array([np.cos(angle), np.sin(angle)])
+            arm = _dogleg_arm(a[:2], b[:2], u, need)
+            if arm is not None:
+                out.append((need, np.array([a[:2], a[:2] + arm * u, b[:2]])))
+            out += [(need, xy) for xy in _u_turns(a[:2], b[:2], u, need, p)]
+    flights = []
+    for _, xy in sorted(out, key=lambda item: item[0]):
+        run = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
+        flights.append(np.column_stack([xy, a[2] + rise * run / run[-1]]))
+    return flights
+
+
+def _u_turns(
+    a: np.ndarray, b: np.ndarray, u: np.ndarray, need: float, p: ProxyParams
+) -> list[np.ndarray]:
+    """U-turns from ``a`` to ``b`` whose flights run along ``u``, about ``need`` long.
+
+    One turns straight back to ``b``; the other first steps aside from ``b`` (across ``u``)
+    until its flights are a corridor's width apart, so that neither runs under the other.
+    """
+    n = np.array([-u[1], u[0]])
+    if (b - a) @ n > 0:
+        n = -n  # step aside away from b
+    apart = 2 * p.corridor_half_width - abs(float((b - a) @ n))
+    out = []
+    for side in (0.0, max(0.0, apart)) if apart > 0 else (0.0,):
+        start = a + side * n
+        arm = max(_MIN_ARM, (need - side - float(np.hypot(*(b - start)))) / 2)
+        corners = [a, start] if side else [a]
+        out.append(np.array([*corners, start + arm * u, b + arm * u, b]))
+    return out
+
+
+def _dogleg_arm(a: np.ndarray, b: np.ndarray, u: np.ndarray, need: float) -> float | None:
+    """The arm ``l`` with ``l + |a + l·u − b| = need`` (None when too short to turn)."""
+    w = b - a
+    # l + sqrt(|w|² − 2 l u·w + l²) = need  ⇒  l = (need² − |w|²) / (2 (need − u·w))
+    den = 2.0 * (need - float(u @ w))
+    if den <= 1e-9:
+        return None
+    arm = (need**2 - float(w @ w)) / den
+    return arm if arm >= _MIN_ARM else None
+
+
+def flight_legs(flight: np.ndarray, comp: int) -> list[Leg]:
+    """The corridors that draw ``flight``."""
+    return [
+        Leg(flight[k, :2], flight[k + 1, :2], float(flight[k, 2]), float(flight[k + 1, 2]), comp)
+        for k in range(len(flight) - 1)
+    ]
+
+
+def choose_flight(
+    a: np.ndarray,
+    b: np.ndarray,
+    comp: int,
+    discs: list[Disc],
+    legs: list[Leg],
+    paths: list[np.ndarray],
+    grid: Grid,
+    draw: Draw,
+    p: ProxyParams,
+) -> np.ndarray | None:
+    """The first of ``candidate_flights(a, b)`` that a body walks, breaking none of ``paths``.
+
+    The ``paths`` (each walked in the whole drawing without the flight) that come within
+    ``_MARGIN`` of a candidate must still be walked with it. The candidate is drawn by
+    ``draw`` on ``grid``'s lattice with the ``discs`` and ``legs`` within ``_MARGIN`` of it
+    and of those paths: all that shapes the floor along them.
+
+    Returns:
+        The flight, or None when every candidate fails.
+    """
+    spans = np.array([[*q[:, :2].min(axis=0), *q[:, :2].max(axis=0)] for q in paths])
+    spans = spans.reshape(-1, 4)
+    for flight in candidate_flights(a, b, p):
+        lo, hi = flight[:, :2].min(axis=0) - _MARGIN, flight[:, :2].max(axis=0) + _MARGIN
+        near = np.flatnonzero(
+            np.all(spans[:, :2] <= hi, axis=1) & np.all(spans[:, 2:] >= lo, axis=1)
+        )
+        if len(near):
+            lo = np.minimum(lo, spans[near, :2].min(axis=0) - _MARGIN)
+            hi = np.maximum(hi, spans[near, 2:].max(axis=0) + _MARGIN)
+        window = Grid.around(np.array([lo, hi]), 0.0, grid.cell)
+        near_discs = [d for d in discs if _overlaps(d.xy, d.xy, lo, hi, p.viewpoint_radius)]
+        near_legs = [g for g in legs if _overlaps(g.a, g.b, lo, hi, p.corridor_half_width)]
+        boxes = draw(near_discs, near_legs + flight_legs(flight, comp), window)
+        if path_fault(flight, boxes, p) is None and all(
+            path_fault(paths[k], boxes, p) is None for k in near
+        ):
+            return flight
+    return None
+
+
+def _overlaps(a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray, pad: float) -> bool:
+    """Whether the box spanned by ``a`` and ``b`` grown by ``pad`` meets the box lo..hi."""
+    return bool(
+        np.all(np.minimum(a, b)[:2] - pad <= hi) and np.all(np.maximum(a, b)[:2] + pad >= lo)
+    )
