@@ -355,7 +355,7 @@ def test_edges_are_walkable_straight_or_by_route(proxies, scan):
         length = sum(np.linalg.norm(graph.position(u) - graph.position(v)) for u, v in links)
         assert length <= P.route_ratio * np.linalg.norm(graph.position(a) - graph.position(b))
     assert proxy.unwalkable == [e for e in proxy.faults if e not in proxy.routes]
-    # Over all 90 graphs (benchmarks/bench_proxies.py) 0.05 % of edges are walkable neither
+    # Over all 90 graphs (benchmarks/bench_proxies.py) 0.03 % of edges are walkable neither
     # way; the single-storey samples are clean, and so is the stairwell.
     if scan in ("17DRP5sb8fy", "gZ6f7yhEvPG", "pLe4wQe7qrG", "PuKPg4mmafe", "yqstnuAEVhm"):
         assert proxy.unwalkable == []

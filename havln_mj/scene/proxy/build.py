@@ -97,7 +97,7 @@ def build_proxy(graph: NavGraph, params: ProxyParams | None = None) -> Proxy:
     """
     p = params or ProxyParams()
     xy = np.array([graph.position(v)[:2] for v in graph.nodes])
-    grid = Grid.around(xy, p.viewpoint_radius + 3 * p.cell, p.cell)
+    grid = _grid(xy, p)
     comp_of = {vp: k for k, members in enumerate(graph.components()) for vp in members}
     edges = [(a, b) for a, b, _ in graph.edges()]
     order = {e: k for k, e in enumerate(edges)}
@@ -144,14 +144,19 @@ def build_proxy(graph: NavGraph, params: ProxyParams | None = None) -> Proxy:
     }
     flights = _choose_flights(graph, edges, faults, routes, discs, legs, grid, p, comp_of)
     if flights:
-        layers, boxes, faults, flights = _draw_flights(
-            graph, edges, faults, routes, flights, discs, legs, grid, p, comp_of
+        grid, layers, boxes, faults, flights = _draw_flights(
+            graph, edges, faults, routes, flights, discs, legs, p, comp_of
         )
     routes = {e: r for e, r in routes.items() if e in faults}  # a flight may free an edge
     for (a, b), flight in flights.items():
         if (a, b) in faults:
             routes[(a, b)] = (a, *(tuple(map(float, q)) for q in flight[1:-1]), b)
     return Proxy(boxes, grid, [layer.free for layer in layers], faults, crossing, routes)
+
+
+def _grid(xy: np.ndarray, p: ProxyParams) -> Grid:
+    """The plan grid holding points ``xy`` with room for their floors and walls."""
+    return Grid.around(xy, p.viewpoint_radius + 3 * p.cell, p.cell)
 
 
 def _draw(
@@ -211,19 +216,21 @@ def _draw_flights(
     flights: dict[Edge, np.ndarray],
     discs: list[Disc],
     legs: list[Leg],
-    grid: Grid,
     p: ProxyParams,
     comp_of: dict[str, int],
-) -> tuple[list[Layer], BoxSet, dict[Edge, str], dict[Edge, np.ndarray]]:
+) -> tuple[Grid, list[Layer], BoxSet, dict[Edge, str], dict[Edge, np.ndarray]]:
     """Redraws the whole proxy with ``flights``, dropping those near a path that broke.
 
-    A path broke when an edge walkable straight before is not, a route no longer walks, or a
-    flight is not walked itself. Flights within ``_FLIGHT_MARGIN`` of a broken path are
-    dropped (all of them, if that leaves none near) and the proxy redrawn until none breaks.
+    The grid grows to hold the flights (a flight may leave the building's outline). A path
+    broke when an edge walkable straight before is not, a route no longer walks, or a flight
+    is not walked itself. Flights within ``_FLIGHT_MARGIN`` of a broken path are dropped (all
+    of them, if that leaves none near) and the proxy redrawn until none breaks.
     """
     flights = dict(flights)
     route_paths = [route_floor_points(graph, r) for r in routes.values()]
+    xy = np.array([d.xy for d in discs])
     while True:
+        grid = _grid(np.concatenate([xy, *(f[:, :2] for f in flights.values())]), p)
         extra = [g for e, f in flights.items() for g in flight_legs(f, comp_of[e[0]])]
         layers, boxes = _draw(discs, legs + extra, grid, p)
         new_faults = _faults(graph, edges, boxes, p)
@@ -231,12 +238,13 @@ def _draw_flights(
         broken += [q for q in route_paths if path_fault(q, boxes, p) is not None]
         broken += [f for f in flights.values() if path_fault(f, boxes, p) is not None]
         if not broken:
-            return layers, boxes, new_faults, flights
+            return grid, layers, boxes, new_faults, flights
         near = {e for e, f in flights.items() if any(_near(f, q) for q in broken)}
         flights = {e: f for e, f in flights.items() if e not in (near or flights)}
         if not flights:
+            grid = _grid(xy, p)
             layers, boxes = _draw(discs, legs, grid, p)
-            return layers, boxes, faults, flights
+            return grid, layers, boxes, faults, flights
 
 
 def _near(a: np.ndarray, b: np.ndarray) -> bool:

@@ -8,7 +8,7 @@ U-turn (out, across, and back). An edge blocked where its corridor crosses anoth
 dogleg around the crossing the same way.
 
 Candidate flights are tried shortest first, in 16 directions, each drawn with the building
-around it in a window (only the elements near it, so a try costs a few milliseconds, not a
+around it in a window (only the elements near it, so a try costs tens of milliseconds, not a
 whole redraw). A flight is taken when a body walks it and every path that walked before still
 walks: straight edges and routes near it. The whole proxy is then redrawn with the flights
 taken and checked again; a flight near a path that broke there is dropped.
@@ -29,7 +29,7 @@ from havln_mj.scene.proxy.walk import path_fault
 Draw = Callable[[list[Disc], list[Leg], Grid], BoxSet]
 
 _DIRECTIONS = 16
-_LENGTHS = (1.05, 1.25)  # flight lengths tried, times the shortest that climbs gently
+_LENGTHS = (1.05, 1.25, 1.6, 2.2)  # lengths tried, times the shortest that climbs gently
 _MIN_ARM = 0.3  # metres: shortest arm of a U-turn
 _MARGIN = 1.5  # metres: paths this near a flight are checked; building this near is drawn
 
