@@ -40,7 +40,7 @@ from havln_mj.scene.proxy.layers import (
 from havln_mj.scene.proxy.params import ProxyParams
 from havln_mj.scene.proxy.raster import Grid
 from havln_mj.scene.proxy.routes import Route, crossings, route_floor_points, shortest_routes
-from havln_mj.scene.proxy.stairs import choose_flight, flight_legs
+from havln_mj.scene.proxy.stairs import choose_flight, flight_legs, plan_span, spans_meet
 from havln_mj.scene.proxy.walk import CAUSES, edge_grade, floor_point, path_fault
 
 __all__ = ["Proxy", "ProxyParams", "build_proxy", "edge_walkability"]
@@ -169,10 +169,6 @@ def _draw(
     return layers, layer_boxes(layers, grid, p, draft)
 
 
-def _straight(graph: NavGraph, edge: Edge) -> np.ndarray:
-    return np.array([floor_point(graph, edge[0]), floor_point(graph, edge[1])])
-
-
 def _choose_flights(
     graph: NavGraph,
     edges: list[Edge],
@@ -185,7 +181,7 @@ def _choose_flights(
     comp_of: dict[str, int],
 ) -> dict[Edge, np.ndarray]:
     """A flight for each edge walkable neither straight nor by route, where one fits."""
-    paths = [_straight(graph, e) for e in edges if e not in faults]
+    paths = [route_floor_points(graph, e) for e in edges if e not in faults]
     paths += [route_floor_points(graph, r) for r in routes.values()]
     extra: list[Leg] = []
     flights: dict[Edge, np.ndarray] = {}
@@ -234,12 +230,17 @@ def _draw_flights(
         extra = [g for e, f in flights.items() for g in flight_legs(f, comp_of[e[0]])]
         layers, boxes = _draw(discs, legs + extra, grid, p)
         new_faults = _faults(graph, edges, boxes, p)
-        broken = [_straight(graph, e) for e in new_faults if e not in faults]
+        broken = [route_floor_points(graph, e) for e in new_faults if e not in faults]
         broken += [q for q in route_paths if path_fault(q, boxes, p) is not None]
         broken += [f for f in flights.values() if path_fault(f, boxes, p) is not None]
         if not broken:
             return grid, layers, boxes, new_faults, flights
-        near = {e for e, f in flights.items() if any(_near(f, q) for q in broken)}
+        spans, m = np.array([plan_span(q) for q in broken]), _FLIGHT_MARGIN
+        near = {
+            e
+            for e, f in flights.items()
+            if spans_meet(spans, f[:, :2].min(axis=0) - m, f[:, :2].max(axis=0) + m).any()
+        }
         flights = {e: f for e, f in flights.items() if e not in (near or flights)}
         if not flights:
             grid = _grid(xy, p)
@@ -247,19 +248,10 @@ def _draw_flights(
             return grid, layers, boxes, faults, flights
 
 
-def _near(a: np.ndarray, b: np.ndarray) -> bool:
-    """Whether the plan bounding boxes of two polylines come within ``_FLIGHT_MARGIN``."""
-    m = _FLIGHT_MARGIN
-    return bool(
-        np.all(a[:, :2].min(0) - m <= b[:, :2].max(0))
-        and np.all(b[:, :2].min(0) - m <= a[:, :2].max(0))
-    )
-
-
 def _faults(graph: NavGraph, edges: list[Edge], boxes: BoxSet, p: ProxyParams) -> dict[Edge, str]:
     out = {}
     for a, b in edges:
-        fault = path_fault(np.array([floor_point(graph, a), floor_point(graph, b)]), boxes, p)
+        fault = path_fault(route_floor_points(graph, (a, b)), boxes, p)
         if fault is not None:
             out[(a, b)] = fault
     return out

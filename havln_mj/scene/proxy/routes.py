@@ -79,7 +79,7 @@ def crossings(graph: NavGraph, edges: list[Edge], p: ProxyParams) -> dict[Edge, 
     r, (z0, z1) = p.body_radius, p.body_z
     xy, h, band_lo, owner = [], [], [], []
     for k, (a, b) in enumerate(edges):
-        pts, run = samples(np.array([floor_point(graph, a), floor_point(graph, b)]), p.cell / 2)
+        pts, run = samples(route_floor_points(graph, (a, b)), p.cell / 2)
         rise = abs(pts[-1, 2] - pts[0, 2]) / max(run[-1], 1e-9)
         xy.append(pts[:, :2])
         h.append(pts[:, 2])

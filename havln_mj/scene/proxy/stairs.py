@@ -77,7 +77,7 @@ def _u_turns(
         n = -n  # step aside away from b
     apart = 2 * p.corridor_half_width - abs(float((b - a) @ n))
     out = []
-    for side in (0.0, max(0.0, apart)) if apart > 0 else (0.0,):
+    for side in (0.0, apart) if apart > 0 else (0.0,):
         start = a + side * n
         arm = max(_MIN_ARM, (need - side - float(np.hypot(*(b - start)))) / 2)
         corners = [a, start] if side else [a]
@@ -125,19 +125,20 @@ def choose_flight(
     Returns:
         The flight, or None when every candidate fails.
     """
-    spans = np.array([[*q[:, :2].min(axis=0), *q[:, :2].max(axis=0)] for q in paths])
-    spans = spans.reshape(-1, 4)
+    spans = np.array([plan_span(q) for q in paths]).reshape(-1, 4)
+    r = np.array([p.viewpoint_radius] * 2 + [-p.viewpoint_radius] * 2)
+    disc_spans = np.array([[*d.xy, *d.xy] for d in discs]).reshape(-1, 4) - r
+    w = np.array([p.corridor_half_width] * 2 + [-p.corridor_half_width] * 2)
+    leg_spans = np.array([plan_span(np.array([g.a, g.b])) for g in legs]).reshape(-1, 4) - w
     for flight in candidate_flights(a, b, p):
         lo, hi = flight[:, :2].min(axis=0) - _MARGIN, flight[:, :2].max(axis=0) + _MARGIN
-        near = np.flatnonzero(
-            np.all(spans[:, :2] <= hi, axis=1) & np.all(spans[:, 2:] >= lo, axis=1)
-        )
+        near = np.flatnonzero(spans_meet(spans, lo, hi))
         if len(near):
             lo = np.minimum(lo, spans[near, :2].min(axis=0) - _MARGIN)
             hi = np.maximum(hi, spans[near, 2:].max(axis=0) + _MARGIN)
         window = Grid.around(np.array([lo, hi]), 0.0, grid.cell)
-        near_discs = [d for d in discs if _overlaps(d.xy, d.xy, lo, hi, p.viewpoint_radius)]
-        near_legs = [g for g in legs if _overlaps(g.a, g.b, lo, hi, p.corridor_half_width)]
+        near_discs = [discs[k] for k in np.flatnonzero(spans_meet(disc_spans, lo, hi))]
+        near_legs = [legs[k] for k in np.flatnonzero(spans_meet(leg_spans, lo, hi))]
         boxes = draw(near_discs, near_legs + flight_legs(flight, comp), window)
         if path_fault(flight, boxes, p) is None and all(
             path_fault(paths[k], boxes, p) is None for k in near
@@ -146,8 +147,11 @@ def choose_flight(
     return None
 
 
-def _overlaps(a: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray, pad: float) -> bool:
-    """Whether the box spanned by ``a`` and ``b`` grown by ``pad`` meets the box lo..hi."""
-    return bool(
-        np.all(np.minimum(a, b)[:2] - pad <= hi) and np.all(np.maximum(a, b)[:2] + pad >= lo)
-    )
+def plan_span(points: np.ndarray) -> np.ndarray:
+    """``[x_min, y_min, x_max, y_max]`` of a polyline's points in plan."""
+    return np.concatenate([points[:, :2].min(axis=0), points[:, :2].max(axis=0)])
+
+
+def spans_meet(spans: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Whether each plan span (rows of :func:`plan_span`) meets the box ``lo..hi``."""
+    return np.all(spans[:, :2] <= hi, axis=1) & np.all(spans[:, 2:] >= lo, axis=1)
