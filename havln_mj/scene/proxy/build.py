@@ -26,22 +26,13 @@ import numpy as np
 
 from havln_mj.scene.boxes import BoxSet
 from havln_mj.scene.navgraph import NavGraph
-from havln_mj.scene.proxy.draw import layer_boxes
-from havln_mj.scene.proxy.layers import (
-    Disc,
-    Edge,
-    Layer,
-    Leg,
-    clear_overhangs,
-    graph_elements,
-    rasterise,
-    separate_components,
-)
+from havln_mj.scene.proxy.draw import draw_elements
+from havln_mj.scene.proxy.layers import Disc, Edge, Layer, Leg, graph_elements
 from havln_mj.scene.proxy.params import ProxyParams
 from havln_mj.scene.proxy.raster import Grid
 from havln_mj.scene.proxy.routes import Route, crossings, route_floor_points, shortest_routes
-from havln_mj.scene.proxy.stairs import choose_flight, flight_legs, plan_span, spans_meet
-from havln_mj.scene.proxy.walk import CAUSES, edge_grade, floor_point, path_fault
+from havln_mj.scene.proxy.stairs import flight_legs, plan_flights, plan_span, spans_meet
+from havln_mj.scene.proxy.walk import CAUSES, edge_grade, path_fault
 
 __all__ = ["Proxy", "ProxyParams", "build_proxy", "edge_walkability"]
 
@@ -93,7 +84,8 @@ def build_proxy(graph: NavGraph, params: ProxyParams | None = None) -> Proxy:
     most one is left out per round. Finally each edge that fails straight and is steep or
     crossing gets its shortest route, when one is at most ``route_ratio`` times as long and
     passes the check as a whole. An edge left with no route gets a flight of its own when
-    one fits (see :mod:`~havln_mj.scene.proxy.stairs`).
+    one fits, moving a walk in its way onto a flight where that makes room (see
+    :func:`~havln_mj.scene.proxy.stairs.plan_flights`).
     """
     p = params or ProxyParams()
     xy = np.array([graph.position(v)[:2] for v in graph.nodes])
@@ -109,7 +101,7 @@ def build_proxy(graph: NavGraph, params: ProxyParams | None = None) -> Proxy:
     for rounds in range(_ROUNDS + 1):
         drawn = [e for e in drawable if e not in left_out]
         discs, legs = graph_elements(graph, drawn, comp_of)
-        layers, boxes = _draw(discs, legs, grid, p)
+        layers, boxes = draw_elements(discs, legs, grid, p)
         faults = _faults(graph, edges, boxes, p)
         if rounds == _ROUNDS:
             break
@@ -142,10 +134,11 @@ def build_proxy(graph: NavGraph, params: ProxyParams | None = None) -> Proxy:
         for e, route in shortest_routes(graph, walkable, wanted, p.route_ratio).items()
         if path_fault(route_floor_points(graph, route), boxes, p) is None
     }
-    flights = _choose_flights(graph, edges, faults, routes, discs, legs, grid, p, comp_of)
+    legs_of = dict(zip(drawn, legs, strict=True))
+    flights, moved = _choose_flights(graph, edges, faults, routes, discs, legs_of, grid, p, comp_of)
     if flights:
         grid, layers, boxes, faults, flights = _draw_flights(
-            graph, edges, faults, routes, flights, discs, legs, p, comp_of
+            graph, edges, faults, routes, flights, moved, discs, legs_of, p, comp_of
         )
     routes = {e: r for e, r in routes.items() if e in faults}  # a flight may free an edge
     for (a, b), flight in flights.items():
@@ -159,49 +152,35 @@ def _grid(xy: np.ndarray, p: ProxyParams) -> Grid:
     return Grid.around(xy, p.viewpoint_radius + 3 * p.cell, p.cell)
 
 
-def _draw(
-    discs: list[Disc], legs: list[Leg], grid: Grid, p: ProxyParams, draft: bool = False
-) -> tuple[list[Layer], BoxSet]:
-    layers = rasterise(discs, legs, grid, p)
-    clear_overhangs(layers, p)
-    for layer in layers:
-        separate_components(layer)
-    return layers, layer_boxes(layers, grid, p, draft)
-
-
 def _choose_flights(
     graph: NavGraph,
     edges: list[Edge],
     faults: dict[Edge, str],
     routes: dict[Edge, Route],
     discs: list[Disc],
-    legs: list[Leg],
+    legs: dict[Edge, Leg],
     grid: Grid,
     p: ProxyParams,
     comp_of: dict[str, int],
-) -> dict[Edge, np.ndarray]:
-    """A flight for each edge walkable neither straight nor by route, where one fits."""
-    paths = [route_floor_points(graph, e) for e in edges if e not in faults]
-    paths += [route_floor_points(graph, r) for r in routes.values()]
-    extra: list[Leg] = []
-    flights: dict[Edge, np.ndarray] = {}
-    for a, b in (e for e in faults if e not in routes):
-        flight = choose_flight(
-            floor_point(graph, a),
-            floor_point(graph, b),
-            comp_of[a],
-            discs,
-            legs + extra,
-            paths,
-            grid,
-            lambda d, g, w: _draw(d, g, w, p, draft=True)[1],
-            p,
-        )
-        if flight is not None:
-            flights[(a, b)] = flight
-            extra += flight_legs(flight, comp_of[a])
-            paths.append(flight)
-    return flights
+) -> tuple[dict[Edge, np.ndarray], set[Edge]]:
+    """Flights for edges walkable neither straight nor by route (see ``plan_flights``)."""
+    paths = {e: route_floor_points(graph, e) for e in edges if e not in faults}
+    paths |= {e: route_floor_points(graph, r) for e, r in routes.items()}
+    wanted = {
+        (a, b): Leg(graph.position(a)[:2], graph.position(b)[:2], graph.floor_z(a),
+                    graph.floor_z(b), comp_of[a])
+        for a, b in faults
+        if (a, b) not in routes
+    }  # fmt: skip
+    return plan_flights(
+        wanted,
+        discs,
+        legs,
+        paths,
+        grid,
+        lambda d, g, w: draw_elements(d, g, w, p, draft=True)[1],
+        p,
+    )
 
 
 def _draw_flights(
@@ -210,27 +189,33 @@ def _draw_flights(
     faults: dict[Edge, str],
     routes: dict[Edge, Route],
     flights: dict[Edge, np.ndarray],
+    moved: set[Edge],
     discs: list[Disc],
-    legs: list[Leg],
+    legs: dict[Edge, Leg],
     p: ProxyParams,
     comp_of: dict[str, int],
 ) -> tuple[Grid, list[Layer], BoxSet, dict[Edge, str], dict[Edge, np.ndarray]]:
     """Redraws the whole proxy with ``flights``, dropping those near a path that broke.
 
-    The grid grows to hold the flights (a flight may leave the building's outline). A path
-    broke when an edge walkable straight before is not, a route no longer walks, or a flight
-    is not walked itself. Flights within ``_FLIGHT_MARGIN`` of a broken path are dropped (all
-    of them, if that leaves none near) and the proxy redrawn until none breaks.
+    The corridors of the ``moved`` edges give way to their flights (and come back if their
+    flight is dropped). The grid grows to hold the flights (a flight may leave the
+    building's outline). A path broke when an edge walkable straight before is neither
+    that nor flown, a route no longer walks, or a flight is not walked itself. Flights
+    within ``_FLIGHT_MARGIN`` of a broken path are dropped (all of them, if that leaves none
+    near) and the proxy redrawn until none breaks.
     """
     flights = dict(flights)
     route_paths = [route_floor_points(graph, r) for r in routes.values()]
     xy = np.array([d.xy for d in discs])
     while True:
         grid = _grid(np.concatenate([xy, *(f[:, :2] for f in flights.values())]), p)
-        extra = [g for e, f in flights.items() for g in flight_legs(f, comp_of[e[0]])]
-        layers, boxes = _draw(discs, legs + extra, grid, p)
+        drawn = [g for e, g in legs.items() if e not in moved or e not in flights]
+        drawn += [g for e, f in flights.items() for g in flight_legs(f, comp_of[e[0]])]
+        layers, boxes = draw_elements(discs, drawn, grid, p)
         new_faults = _faults(graph, edges, boxes, p)
-        broken = [route_floor_points(graph, e) for e in new_faults if e not in faults]
+        broken = [
+            route_floor_points(graph, e) for e in new_faults if e not in faults and e not in flights
+        ]
         broken += [q for q in route_paths if path_fault(q, boxes, p) is not None]
         broken += [f for f in flights.values() if path_fault(f, boxes, p) is not None]
         if not broken:
@@ -244,7 +229,7 @@ def _draw_flights(
         flights = {e: f for e, f in flights.items() if e not in (near or flights)}
         if not flights:
             grid = _grid(xy, p)
-            layers, boxes = _draw(discs, legs, grid, p)
+            layers, boxes = draw_elements(discs, list(legs.values()), grid, p)
             return grid, layers, boxes, faults, flights
 
 

@@ -14,7 +14,15 @@ import numpy as np
 from scipy.ndimage import binary_dilation, maximum_filter
 
 from havln_mj.scene.boxes import BoxSet
-from havln_mj.scene.proxy.layers import FLOOR_QUANTUM, Layer
+from havln_mj.scene.proxy.layers import (
+    FLOOR_QUANTUM,
+    Disc,
+    Layer,
+    Leg,
+    clear_overhangs,
+    rasterise,
+    separate_components,
+)
 from havln_mj.scene.proxy.params import ProxyParams
 from havln_mj.scene.proxy.raster import Grid, cover_cells, cover_rows, neighbours
 
@@ -26,6 +34,21 @@ _NEAR = 4  # cells: within this of another layer's floor, boxes keep to their ow
 _Q = FLOOR_QUANTUM
 _EPS = 1e-6  # metres
 _WALL_Q = 0.1  # wall top quantum under another layer's floor
+
+
+def draw_elements(
+    discs: list[Disc], legs: list[Leg], grid: Grid, p: ProxyParams, draft: bool = False
+) -> tuple[list[Layer], BoxSet]:
+    """The layers of free floor of ``discs`` and ``legs`` on ``grid``, and their boxes.
+
+    Floor that would hang in a body's way is cleared and graph components are walled apart
+    before the boxes are drawn (``draft``: see :func:`layer_boxes`).
+    """
+    layers = rasterise(discs, legs, grid, p)
+    clear_overhangs(layers, p)
+    for layer in layers:
+        separate_components(layer)
+    return layers, layer_boxes(layers, grid, p, draft)
 
 
 def layer_boxes(layers: list[Layer], grid: Grid, p: ProxyParams, draft: bool = False) -> BoxSet:

@@ -10,8 +10,11 @@ dogleg around the crossing the same way.
 Candidate flights are tried shortest first, in 16 directions, each drawn with the building
 around it in a window (only the elements near it, so a try costs tens of milliseconds, not a
 whole redraw). A flight is taken when a body walks it and every path that walked before still
-walks: straight edges and routes near it. The whole proxy is then redrawn with the flights
-taken and checked again; a flight near a path that broke there is dropped.
+walks: straight edges and routes near it. Where none fits because another walk passes too
+close (a landing's edge right over a viewpoint on the stair below it, or a flight taken
+earlier), that walk is moved out of the way: it gets a flight too, drawn after the edge's.
+The whole proxy is then redrawn with the flights taken and checked again; a flight near a
+path that broke there is dropped.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from collections.abc import Callable
 import numpy as np
 
 from havln_mj.scene.boxes import BoxSet
-from havln_mj.scene.proxy.layers import Disc, Leg
+from havln_mj.scene.proxy.layers import Disc, Edge, Leg
 from havln_mj.scene.proxy.params import ProxyParams
 from havln_mj.scene.proxy.raster import Grid
 from havln_mj.scene.proxy.walk import path_fault
@@ -32,6 +35,7 @@ _DIRECTIONS = 16
 _LENGTHS = (1.05, 1.25, 1.6, 2.2)  # lengths tried, times the shortest that climbs gently
 _MIN_ARM = 0.3  # metres: shortest arm of a U-turn
 _MARGIN = 1.5  # metres: paths this near a flight are checked; building this near is drawn
+_MOVES = 4  # walks nearest an edge no flight fits that are tried out of its way
 
 
 def candidate_flights(a: np.ndarray, b: np.ndarray, p: ProxyParams) -> list[np.ndarray]:
@@ -40,14 +44,14 @@ def candidate_flights(a: np.ndarray, b: np.ndarray, p: ProxyParams) -> list[np.n
     Each is a dogleg ``a → m → b`` or a U-turn ``a → a + L·u → b + L·u → b`` (also one that
     first steps aside, so its flights are a corridor apart) for 16 directions ``u``, at
     horizontal lengths ``_LENGTHS`` times the shortest that climbs at ``stair_grade``, and
-    never shorter than the edge itself. Floors rise evenly with horizontal distance along
-    the polyline.
+    never shorter than the edge itself, each shape once. Floors rise evenly with
+    horizontal distance along the polyline.
     """
     v = b[:2] - a[:2]
     d = float(np.hypot(*v))
     rise = float(b[2] - a[2])
     base = max(d, abs(rise) / p.stair_grade)
-    out: list[tuple[float, np.ndarray]] = []
+    out: list[np.ndarray] = []
     for factor in _LENGTHS:
         need = base * factor
         for k in range(_DIRECTIONS):
@@ -55,13 +59,16 @@ def candidate_flights(a: np.ndarray, b: np.ndarray, p: ProxyParams) -> list[np.n
             u = np.array([np.cos(angle), np.sin(angle)])
             arm = _dogleg_arm(a[:2], b[:2], u, need)
             if arm is not None:
-                out.append((need, np.array([a[:2], a[:2] + arm * u, b[:2]])))
-            out += [(need, xy) for xy in _u_turns(a[:2], b[:2], u, need, p)]
-    flights = []
-    for _, xy in sorted(out, key=lambda item: item[0]):
-        run = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
-        flights.append(np.column_stack([xy, a[2] + rise * run / run[-1]]))
-    return flights
+                out.append(np.array([a[:2], a[:2] + arm * u, b[:2]]))
+            out += _u_turns(a[:2], b[:2], u, need, p)
+    # Short U-turns keep their shortest arm at several lengths: each shape is tried once.
+    shapes: dict[bytes, np.ndarray] = {}
+    for xy in out:
+        shapes.setdefault(np.round(xy, 3).tobytes(), xy)
+    out = list(shapes.values())
+    runs = [np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))]) for xy in out]
+    order = sorted(range(len(out)), key=lambda k: runs[k][-1])  # stable: ties keep their turn
+    return [np.column_stack([out[k], a[2] + rise * runs[k] / runs[k][-1]]) for k in order]
 
 
 def _u_turns(
@@ -145,6 +152,92 @@ def choose_flight(
         ):
             return flight
     return None
+
+
+def plan_flights(
+    wanted: dict[Edge, Leg],
+    discs: list[Disc],
+    legs: dict[Edge, Leg],
+    paths: dict[Edge, np.ndarray],
+    grid: Grid,
+    draw: Draw,
+    p: ProxyParams,
+) -> tuple[dict[Edge, np.ndarray], set[Edge]]:
+    """Flights for the ``wanted`` edges, where they fit, taken in turn.
+
+    Each edge gets the first candidate :func:`choose_flight` takes. Then each edge none fit
+    tries moving each of the ``_MOVES`` walks nearest its ends out of its way, nearest
+    first: a straight edge (its corridor is no longer drawn) or a flight. The move is made
+    when, without that walk, a flight fits the edge, and then, with the edge's flight, one
+    fits the walk too.
+
+    Args:
+        wanted: The edges to fly, each as the leg between its ends' floors.
+        discs: The viewpoints' discs.
+        legs: The drawn straight edges' corridors.
+        paths: Every path that walks (straight edges, routes), by the edge it serves.
+        grid: The plan grid the proxy is drawn on.
+        draw: Draws discs and legs on a window of ``grid``'s lattice (see :func:`choose_flight`).
+        p: The body and the limits.
+
+    Returns:
+        The flights by edge, and the straight edges (keys of ``legs``) whose corridors they
+        replace.
+    """
+    comp = {e: g.comp for e, g in (legs | wanted).items()}
+    ends = {e: (np.array([*g.a, g.fa]), np.array([*g.b, g.fb])) for e, g in (legs | wanted).items()}
+    flights: dict[Edge, np.ndarray] = {}
+    moved: set[Edge] = set()
+
+    def fit(edge: Edge, gone: set[Edge]) -> np.ndarray | None:
+        gone = gone | moved
+        drawn = [g for e, g in legs.items() if e not in gone]
+        drawn += [g for e, f in flights.items() if e not in gone for g in flight_legs(f, comp[e])]
+        walks = [q for e, q in (paths | flights).items() if e not in gone]
+        return choose_flight(*ends[edge], comp[edge], discs, drawn, walks, grid, draw, p)
+
+    for edge in wanted:
+        flight = fit(edge, set())
+        if flight is not None:
+            flights[edge] = flight
+    for edge in (e for e in wanted if e not in flights):
+        for other in _nearest(ends[edge], legs, flights, paths, p):
+            flight = fit(edge, {other})
+            if flight is None:
+                continue
+            flights[edge] = flight
+            detour = fit(other, {other})
+            if detour is not None:
+                flights[other] = detour
+                moved |= {other} & legs.keys()
+                break
+            del flights[edge]
+    return flights, moved
+
+
+def _nearest(
+    ends: tuple[np.ndarray, np.ndarray],
+    legs: dict[Edge, Leg],
+    flights: dict[Edge, np.ndarray],
+    paths: dict[Edge, np.ndarray],
+    p: ProxyParams,
+) -> list[Edge]:
+    """The ``_MOVES`` walks (straight edges walked, flights) nearest ``ends`` that reach them.
+
+    A walk reaches an end when its corridor meets the end's disc.
+    """
+    reach = p.viewpoint_radius + p.corridor_half_width
+    walks = {e: paths[e] for e in legs if e in paths} | flights
+    gaps = {e: min(_gap(q, end[:2]) for end in ends) for e, q in walks.items()}
+    return sorted((e for e, gap in gaps.items() if gap < reach), key=gaps.get)[:_MOVES]
+
+
+def _gap(polyline: np.ndarray, point: np.ndarray) -> float:
+    """Plan distance from ``point`` to a polyline of floor points."""
+    a, b = polyline[:-1, :2], polyline[1:, :2]
+    ab = b - a
+    t = np.clip(np.sum((point - a) * ab, axis=1) / np.maximum(np.sum(ab * ab, axis=1), 1e-12), 0, 1)
+    return float(np.min(np.hypot(*(a + t[:, None] * ab - point).T)))
 
 
 def plan_span(points: np.ndarray) -> np.ndarray:
