@@ -166,12 +166,8 @@ def _choose_flights(
     """Flights for edges walkable neither straight nor by route (see ``plan_flights``)."""
     paths = {e: route_floor_points(graph, e) for e in edges if e not in faults}
     paths |= {e: route_floor_points(graph, r) for e, r in routes.items()}
-    wanted = {
-        (a, b): Leg(graph.position(a)[:2], graph.position(b)[:2], graph.floor_z(a),
-                    graph.floor_z(b), comp_of[a])
-        for a, b in faults
-        if (a, b) not in routes
-    }  # fmt: skip
+    flown = [e for e in faults if e not in routes]
+    wanted = dict(zip(flown, graph_elements(graph, flown, comp_of)[1], strict=True))
     return plan_flights(
         wanted,
         discs,

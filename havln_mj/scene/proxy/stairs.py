@@ -27,7 +27,7 @@ from havln_mj.scene.boxes import BoxSet
 from havln_mj.scene.proxy.layers import Disc, Edge, Leg
 from havln_mj.scene.proxy.params import ProxyParams
 from havln_mj.scene.proxy.raster import Grid
-from havln_mj.scene.proxy.walk import path_fault
+from havln_mj.scene.proxy.walk import path_fault, samples
 
 Draw = Callable[[list[Disc], list[Leg], Grid], BoxSet]
 
@@ -222,22 +222,24 @@ def _nearest(
     paths: dict[Edge, np.ndarray],
     p: ProxyParams,
 ) -> list[Edge]:
-    """The ``_MOVES`` walks (straight edges walked, flights) nearest ``ends`` that reach them.
+    """The ``_MOVES`` walks (straight edges walked, flights) most in the way of ``ends``.
 
-    A walk reaches an end when its corridor meets the end's disc.
+    A walk reaches an end when its corridor meets the end's disc. It is in the way where it
+    passes too far above or below the end's floor to walk on from it (a ``step`` more than
+    ``max_grade`` allows over the distance) but too close to stack (``headroom``): those
+    come first, nearest first, then the walks that only reach an end.
     """
     reach = p.viewpoint_radius + p.corridor_half_width
     walks = {e: paths[e] for e in legs if e in paths} | flights
-    gaps = {e: min(_gap(q, end[:2]) for end in ends) for e, q in walks.items()}
-    return sorted((e for e, gap in gaps.items() if gap < reach), key=gaps.get)[:_MOVES]
-
-
-def _gap(polyline: np.ndarray, point: np.ndarray) -> float:
-    """Plan distance from ``point`` to a polyline of floor points."""
-    a, b = polyline[:-1, :2], polyline[1:, :2]
-    ab = b - a
-    t = np.clip(np.sum((point - a) * ab, axis=1) / np.maximum(np.sum(ab * ab, axis=1), 1e-12), 0, 1)
-    return float(np.min(np.hypot(*(a + t[:, None] * ab - point).T)))
+    order = {}
+    for e, q in walks.items():
+        pts, _ = samples(q, p.cell)
+        gap = np.array([np.hypot(*(pts[:, :2] - end[:2]).T) for end in ends])  # (2, n)
+        dz = np.abs(pts[:, 2] - np.array([[end[2]] for end in ends]))
+        other = (dz > p.max_grade * gap + p.step) & (dz < p.headroom)
+        if gap.min() < reach:
+            order[e] = (np.where(other, gap, np.inf).min(), gap.min())
+    return sorted(order, key=order.get)[:_MOVES]
 
 
 def plan_span(points: np.ndarray) -> np.ndarray:
