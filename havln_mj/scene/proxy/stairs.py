@@ -166,10 +166,10 @@ def plan_flights(
     """Flights for the ``wanted`` edges, where they fit, taken in turn.
 
     Each edge gets the first candidate :func:`choose_flight` takes. Then each edge none fit
-    tries moving each of the ``_MOVES`` walks nearest its ends out of its way, nearest
-    first: a straight edge (its corridor is no longer drawn) or a flight. The move is made
-    when, without that walk, a flight fits the edge, and then, with the edge's flight, one
-    fits the walk too.
+    tries moving each of the ``_MOVES`` walks most in its way (see :func:`_in_the_way`) out
+    of it, in turn: a straight edge (its corridor is no longer drawn) or a flight. The move
+    is made when, without that walk, a flight fits the edge, and then, with the edge's
+    flight, one fits the walk too.
 
     Args:
         wanted: The edges to fly, each as the leg between its ends' floors.
@@ -201,7 +201,7 @@ def plan_flights(
         if flight is not None:
             flights[edge] = flight
     for edge in (e for e in wanted if e not in flights):
-        for other in _nearest(ends[edge], legs, flights, paths, p):
+        for other in _in_the_way(ends[edge], legs, flights, paths, p):
             flight = fit(edge, {other})
             if flight is None:
                 continue
@@ -215,7 +215,7 @@ def plan_flights(
     return flights, moved
 
 
-def _nearest(
+def _in_the_way(
     ends: tuple[np.ndarray, np.ndarray],
     legs: dict[Edge, Leg],
     flights: dict[Edge, np.ndarray],
@@ -231,7 +231,7 @@ def _nearest(
     """
     reach = p.viewpoint_radius + p.corridor_half_width
     walks = {e: paths[e] for e in legs if e in paths} | flights
-    order = {}
+    order: dict[Edge, tuple[float, float]] = {}
     for e, q in walks.items():
         pts, _ = samples(q, p.cell)
         gap = np.array([np.hypot(*(pts[:, :2] - end[:2]).T) for end in ends])  # (2, n)
