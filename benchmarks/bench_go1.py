@@ -234,10 +234,9 @@ def _stairs(data: Path, scan_id: str, edges: int, seed: int, flights: bool = Fal
     """The GO1 walking the climbing edges (|Δfloor| > 0.3 m) of a real building's graph proxy.
 
     With ``flights``, the edges walked along a flight drawn for them instead. Each row says
-    how the proxy serves the edge: ``straight``, ``by route`` (walked through the route's
-    stops), ``by flight`` or the fault that leaves it unwalkable.
+    how the scan serves the edge (its stored routes): ``straight``, ``by route`` (walked
+    through the route's viewpoints), ``by flight``, or ``mesh`` in a real mesh.
     """
-    from havln_mj.scene.proxy.build import build_proxy
     from havln_mj.scene.scan import load_scan
     from havln_mj.sim.crowd import NO_CROWD
     from havln_mj.sim.legged import LeggedAgent, LeggedOptions, LeggedWorld
@@ -252,7 +251,6 @@ def _stairs(data: Path, scan_id: str, edges: int, seed: int, flights: bool = Fal
     flown = {e for e, via in scan.routes.items() if not all(isinstance(s, str) for s in via)}
     if flights:
         climbs = sorted(flown)
-    proxy = build_proxy(g) if scan.kind == "graph proxy" else None
     rng = np.random.default_rng(seed)
     picks = [climbs[int(k)] for k in rng.permutation(len(climbs))[:edges]]
     world = LeggedWorld(scan, WorldOptions(collision="boxes"), NO_CROWD, LeggedOptions())
@@ -267,10 +265,10 @@ def _stairs(data: Path, scan_id: str, edges: int, seed: int, flights: bool = Fal
             drawn = "mesh"
             if (a, b) in flown:
                 drawn = "by flight"
-            elif proxy is not None and (a, b) in proxy.routes:
+            elif scan.route(a, b) is not None:
                 drawn = "by route"
-            elif proxy is not None:
-                drawn = proxy.faults.get((a, b), "straight")
+            elif scan.kind == "graph proxy":
+                drawn = "straight"
             rows.append(
                 {
                     "proxy_edge": drawn,

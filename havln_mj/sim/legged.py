@@ -249,7 +249,7 @@ class LeggedAgent:
 
         Turn to face the point, walk the distance, and once more if still too far; None as
         ``final_heading`` keeps the walking direction. When the scan walks this edge by a route
-        (see :meth:`LeggedWorld.waypoints`), each of its viewpoints is walked to in turn first.
+        (see :meth:`LeggedWorld.waypoints`), each of its stops is walked to in turn first.
         """
         retry = self.world.options.retry_m
         legs = [*self.world.waypoints(self.position(), np.asarray(target, float)), target]

@@ -231,8 +231,11 @@ def _in_the_way(
     """
     reach = p.viewpoint_radius + p.corridor_half_width
     walks = {e: paths[e] for e in legs if e in paths} | flights
+    spans = np.array([plan_span(q) for q in walks.values()]).reshape(-1, 4)
+    ends_xy = np.array([end[:2] for end in ends])
+    near = spans_meet(spans, ends_xy.min(axis=0) - reach, ends_xy.max(axis=0) + reach)
     order: dict[Edge, tuple[float, float]] = {}
-    for e, q in walks.items():
+    for e, q in (item for item, meets in zip(walks.items(), near, strict=True) if meets):
         pts, _ = samples(q, p.cell)
         gap = np.array([np.hypot(*(pts[:, :2] - end[:2]).T) for end in ends])  # (2, n)
         dz = np.abs(pts[:, 2] - np.array([[end[2]] for end in ends]))
