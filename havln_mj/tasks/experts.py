@@ -27,7 +27,7 @@ import heapq
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Protocol, Union
+from typing import Protocol
 
 import numpy as np
 
@@ -37,11 +37,9 @@ from havln_mj.scene.navgraph import NavGraph
 from havln_mj.sim.egocentric import DEFAULT_TURN, EgoAction
 from havln_mj.sim.state import SimState
 from havln_mj.tasks.datasets import Episode
-from havln_mj.tasks.rewards import RewardFn, StepOutcome, get_reward
+from havln_mj.tasks.rewards import RewardFn
+from havln_mj.tasks.step import STOP, Action, GraphAction, StepResult, TaskStep
 
-GraphAction = tuple[int, float, float]
-Action = Union[EgoAction, GraphAction]  # noqa: UP007 - a runtime alias; `|` fails on tuple[...]
-STOP = EgoAction.STOP  # ends the episode in either action space
 WAIT: GraphAction = (0, 0.0, 0.0)
 TURN = DEFAULT_TURN  # 30°: one discrete view step, and the teacher's heading tolerance
 SIGHT_RADIUS = 4.5  # metres: HA3D's expert avoids people this close to the agent
@@ -749,19 +747,19 @@ def _sim_graph(sim: object, scan: str) -> NavGraph:
     return graph(scan)
 
 
-def _record(
-    state: SimState, action: Action | None, distance: float, rewards: Mapping[str, float]
-) -> StepRecord:
+def _record(result: StepResult) -> StepRecord:
+    state = result.state
+    rewards = {**result.reward_terms, "total": result.reward} if result.action is not None else {}
     return StepRecord(
-        action,
+        result.action,
         state.location.viewpointId,
         float(state.heading),
         float(state.elevation),
-        int(state.isCrushed),
-        tuple(state.crushedBy),
+        int(result.collided),
+        result.crushed_by,
         float(state.time),
-        distance,
-        dict(rewards),
+        result.distance,
+        rewards,
     )
 
 
@@ -775,10 +773,11 @@ def run_expert(
     max_steps: int | None = None,
     instruction: int = 0,
 ) -> Trajectory:
-    """Runs ``expert`` through ``episode`` on ``sim`` (batch size 1).
+    """Runs ``expert`` through ``episode`` on ``sim`` (batch size 1) with the task step.
 
     Starts the episode at its start viewpoint, heading and elevation 0, then asks the expert
-    for actions until it says STOP or ``max_steps`` actions were taken.
+    for actions until it says STOP or ``max_steps`` actions were taken. Collisions, rewards
+    and distances are the task step's (:mod:`havln_mj.tasks.step`).
 
     Args:
         sim: A ``havln_mj.Simulator`` (rendering may be off).
@@ -793,39 +792,16 @@ def run_expert(
     Returns:
         The trajectory, with per-step rewards.
     """
-    reward_fn = get_reward(reward)
     cap = _positive("max_steps", expert.max_steps if max_steps is None else max_steps)
-    sim.newEpisode([episode.scan], [episode.start], [episode.heading], [0.0])
-    graph = graph or _sim_graph(sim, episode.scan)
     episode.instruction(instruction)  # raises for an index the episode does not have
+    task = TaskStep(sim, reward=reward, max_steps=cap)
+    result = task.start([episode])[0]
+    graph = graph or _sim_graph(sim, episode.scan)
     ctx = ExpertContext(sim, episode, graph, instruction=instruction)
-    state = sim.getState()[0]
-    dist = graph.distance(state.location.viewpointId, episode.goal)
-    records = [_record(state, None, dist, {})]
+    records = [_record(result)]
     expert.reset(ctx)
-    stopped = False
-    while ctx.step < cap:
-        action = expert.act(ctx, state)
-        stopped = action is STOP
-        if not stopped:
-            if isinstance(action, EgoAction):
-                sim.makeEgoAction([action])
-            else:
-                index, dh, de = action
-                sim.makeAction([int(index)], [float(dh)], [float(de)])
-            state = sim.getState()[0]
-        new = graph.distance(state.location.viewpointId, episode.goal)
-        collided = bool(state.isCrushed) and not stopped
-        terms = reward_fn(StepOutcome(stopped, new, new - dist, collided))
-        terms = {**terms, "total": float(sum(terms.values()))}
-        rec = _record(state, action, new, terms)
-        if stopped:  # STOP does not act: no collision, no time
-            rec = StepRecord(
-                STOP, rec.viewpoint, rec.heading, rec.elevation, 0, (), rec.time, new, terms
-            )
-        records.append(rec)
-        dist = new
+    while not result.done:
+        result = task.step([expert.act(ctx, result.state)])[0]
+        records.append(_record(result))
         ctx.step += 1
-        if stopped:
-            break
-    return Trajectory(episode, expert.name, tuple(records), stopped)
+    return Trajectory(episode, expert.name, tuple(records), result.stopped)

@@ -15,6 +15,7 @@ of every instruction.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 import zlib
@@ -155,12 +156,16 @@ def procedural_episodes(
     """Episodes of several procedural scenes (the evaluation harness's ``--scenes``).
 
     Scene ``s`` (in the given order) gets path ids from ``first_id + 10_000 * s``; ``skip``
-    leaves out each scene's first paths (another split's: val_seen after train).
+    leaves out each scene's first paths (another split's: val_seen after train). Episodes name
+    their scene as given (a scan folder by its path), so the simulator finds it again.
     """
     out: list[Episode] = []
     for s, scene in enumerate(scenes):
         first = first_id + SCENE_STRIDE * s
-        out += scene_episodes(load_scan(scene), per_scene, seed, first_path_id=first, skip=skip)
+        scan = load_scan(scene)
+        if scan.scene_id != scene:
+            scan = dataclasses.replace(scan, scene_id=scene)
+        out += scene_episodes(scan, per_scene, seed, first_path_id=first, skip=skip)
     return out
 
 

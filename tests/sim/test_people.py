@@ -158,3 +158,27 @@ def test_wait_lets_people_move_and_checks_collisions_throughout():
         one.wait([-1.0])
     with pytest.raises(IndexError, match="batch size"):
         one.wait([1.0, 1.0])
+
+
+@pytest.mark.parametrize("body", ["point", "go1"])
+def test_skinned_people_appear_with_either_body(graph, blob_smpl, body):
+    # A person drawn as an SMPL skin (a user's model file) 2.5 m ahead of a viewpoint: the
+    # frame pipeline poses skins for every body, the GO1's head camera included.
+    from havln_mj.humans.skinned import Skin
+    from havln_mj.sim.legged import LeggedOptions
+
+    vp = max(graph.nodes, key=graph.degree)
+    eye = graph.position(vp)
+    spot = np.array([eye[0], eye[1] + 2.5, graph.floor_z(vp)])
+
+    def skinned(scan_id, g, rng):
+        clip = idle(1.7, rng)
+        return Crowd([Person(BodyShape(1.7), clip, spot, math.pi, "idle", skin=Skin(blob_smpl))])
+
+    sim = MatterSim.Simulator(humans=skinned, body=body, legged=LeggedOptions(camera_height=1.2))
+    sim.setCameraResolution(96, 72)
+    sim.set_human_mask_enabled(True)
+    sim.newEpisode([SCAN], [vp], [0.0], [-0.1])
+    state = sim.getState()[0]
+    sim.close()
+    assert state.humanMask.mean() > 0.002, body
