@@ -58,9 +58,9 @@ def test_bad_input_names_the_path(tmp_path):
     path = tmp_path / "bad.mp4"
     with pytest.raises(InvalidArgumentError, match=r"must end in \.mp4"):
         VideoWriter(tmp_path / "bad.avi", fps=10, size=(8, 8))
-    with pytest.raises(InvalidArgumentError, match="bad.mp4: fps"):
+    with pytest.raises(InvalidArgumentError, match=r"bad\.mp4: fps"):
         VideoWriter(path, fps=0, size=(8, 8))
-    with pytest.raises(InvalidArgumentError, match="bad.mp4: size"):
+    with pytest.raises(InvalidArgumentError, match=r"bad\.mp4: size"):
         VideoWriter(path, fps=10, size=(8, -2))
     video = VideoWriter(path, fps=10, size=(8, 8))
     with pytest.raises(InvalidArgumentError, match=r"bad.mp4: frames must be uint8.*\(8, 8, 3\)"):
