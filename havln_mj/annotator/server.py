@@ -89,6 +89,8 @@ class _Handler(http.server.BaseHTTPRequestHandler):
         query = {k: v[-1] for k, v in parse_qs(url.query).items()}
         try:
             route(query)
+        except ConnectionError:
+            pass  # the page dropped the request (e.g. a view superseded by the next one)
         except HavlnError as exc:
             self._json({"error": str(exc)}, 400)
         except Exception as exc:  # the page shows it; the server keeps serving

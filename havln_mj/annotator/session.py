@@ -209,14 +209,19 @@ class AnnotationSession:
         view = self._scene_view().render(pos, heading, elevation, _number("t", t))
         return _png(view.rgb)
 
-    def _viewer(self, viewpoint: str) -> np.ndarray:
-        """Where to film a person on ``viewpoint`` from: a viewpoint that sees theirs, ~3 m off."""
+    def _viewer(self, viewpoint: str, facing: float) -> np.ndarray:
+        """Where to film a person on ``viewpoint`` from (``facing``: their heading, radians).
+
+        A viewpoint that sees theirs, about 3 m off, in front of them rather than behind.
+        """
         graph = self.scan.graph
         c = graph.connectivity
         here, i = graph.position(viewpoint), graph.index(viewpoint)
+        front = np.array([math.sin(facing), math.cos(facing)])
         best, score = None, math.inf
         for vp in graph.nodes:
-            d = float(np.linalg.norm(graph.position(vp)[:2] - here[:2]))
+            offset = graph.position(vp)[:2] - here[:2]
+            d = float(np.linalg.norm(offset))
             if (
                 vp == viewpoint
                 or d < 1.2
@@ -224,10 +229,13 @@ class AnnotationSession:
             ):
                 continue
             seen = c.visible[graph.index(vp), i] or c.unobstructed[graph.index(vp), i]
-            s = abs(d - VIEWER_DISTANCE) + (0.0 if seen else 100.0)
+            behind = 1.0 - float(front @ offset) / d  # 0 straight ahead, 2 right behind
+            s = abs(d - VIEWER_DISTANCE) + 1.5 * behind + (0.0 if seen else 100.0)
             if s < score:
                 best, score = graph.position(vp), s
-        return best if best is not None else here + np.array([0.0, -VIEWER_DISTANCE, 0.0])
+        if best is None:
+            return here + np.array([*(VIEWER_DISTANCE * front), 0.0])
+        return best
 
     def preview_mp4(self, viewpoint: str) -> bytes:
         """A short H.264 clip of the person on ``viewpoint`` doing their activity.
@@ -239,7 +247,7 @@ class AnnotationSession:
         if k is None:
             raise InvalidArgumentError(f"no person on viewpoint {viewpoint!r} to preview")
         crowd, view = self.crowd(), self._scene_view()
-        camera = self._viewer(viewpoint)
+        camera = self._viewer(viewpoint, crowd.people[k].heading)
         s = self.settings
         n = round(PREVIEW_SECONDS * PREVIEW_FPS)
         with tempfile.TemporaryDirectory(prefix="havln-preview-") as tmp:
