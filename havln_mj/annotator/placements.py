@@ -30,7 +30,8 @@ from havln_mj.scene.navgraph import NavGraph
 MODELS = (0, 1, 2)
 """HA3D's motion model ids: the three motions generated for each activity sentence."""
 
-_HA3D_NAME = {code: name for name, code in HA3D_REGIONS.items()}
+HA3D_NAME = {code: name for name, code in HA3D_REGIONS.items()}
+"""HA3D's region name (the part of a sentence before ':') of each region label code."""
 
 
 @dataclass(frozen=True)
@@ -61,7 +62,7 @@ def ha3d_degrees(heading: float) -> float:
 def to_entry(person: Placement, catalog: Catalog) -> list:
     """The HA3D entry ``["region:activity", model, heading°]`` of one person."""
     activity = catalog.get(person.activity)
-    sentence = person.sentence or f"{_HA3D_NAME[activity.region]}:{activity.text}"
+    sentence = person.sentence or f"{HA3D_NAME[activity.region]}:{activity.text}"
     return [sentence, int(person.model), ha3d_degrees(person.heading)]
 
 

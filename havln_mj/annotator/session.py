@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from havln_mj.annotator.placements import (
+    HA3D_NAME,
     MODELS,
     Placement,
     check_people,
@@ -29,7 +30,7 @@ from havln_mj.annotator.placements import (
 from havln_mj.annotator.plan import scene_plan
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.frames import heading_to
-from havln_mj.humans.catalog import HA3D_REGIONS, Catalog, load_catalog
+from havln_mj.humans.catalog import Catalog, load_catalog
 from havln_mj.humans.crowd import Crowd
 from havln_mj.humans.population import populate_ha3d
 from havln_mj.render.video import VideoWriter
@@ -40,7 +41,6 @@ from havln_mj.sim.world import WorldOptions
 PREVIEW_SECONDS = 4.0
 PREVIEW_FPS = 10.0
 VIEWER_DISTANCE = 3.0  # metres: preferred distance of the preview camera from the person
-_HA3D_NAME = {code: name for name, code in HA3D_REGIONS.items()}
 
 
 def _number(name: str, value: object) -> float:
@@ -96,7 +96,7 @@ class AnnotationSession:
             "regions": [
                 {
                     "code": code,
-                    "name": _HA3D_NAME[code],
+                    "name": HA3D_NAME[code],
                     "activities": [
                         {"id": a.id, "text": a.text, "sits": a.needs_seat, "walks": a.needs_path}
                         for a in self.catalog.activities(code)
@@ -108,10 +108,19 @@ class AnnotationSession:
 
     def people_json(self) -> list[dict]:
         """Each person as the page shows them, with the activity the simulator will play."""
-        plays = {p.viewpoint: p for p in self.crowd().people}
+        plays = {p.viewpoint: p.activity for p in self.crowd().people}
         out = []
         for p in self.people:
-            played = plays[p.viewpoint]
+            played, note = plays[p.viewpoint], ""
+            if played != p.activity:
+                if self.catalog.get(p.activity).needs_seat:
+                    why = "sitting needs a seat, which placements do not give"
+                elif p.sentence:  # HA3D's own words; ours always map back onto themselves
+                    why = "the sentence fits several of the room's activities or needs what "
+                    why += "this viewpoint lacks; which one plays depends on the simulator's seed"
+                else:
+                    why = "walking needs a neighbouring viewpoint on the same floor, 1-6 m away"
+                note = f"The simulator plays: {self.catalog.get(played).text} ({why})."
             out.append(
                 {
                     "viewpoint": p.viewpoint,
@@ -119,8 +128,8 @@ class AnnotationSession:
                     "model": p.model,
                     "heading_deg": round(math.degrees(p.heading) % 360.0, 2),
                     "sentence": to_entry(p, self.catalog)[0],
-                    "plays": played.activity,
-                    "plays_text": played.text,
+                    "plays": played,
+                    "note": note,
                 }
             )
         return out
@@ -174,16 +183,16 @@ class AnnotationSession:
 
     def save(self, path: Path | None = None) -> Path:
         """Writes the people into the placement file (default: the one given at start)."""
-        if path is not None:
-            self.path = Path(path).expanduser()
-        save_people(self.path, self.scan.scene_id, self.people, self.catalog)
-        return self.path
+        target = self.path if path is None else Path(path).expanduser().resolve()
+        save_people(target, self.scan.scene_id, self.people, self.catalog)
+        self.path = target
+        return target
 
     def load(self, path: Path | None = None) -> None:
         """Replaces the people with a placement file's (default: the one given at start)."""
-        if path is not None:
-            self.path = Path(path).expanduser()
-        self.people = load_people(self.path, self.scan.scene_id, self.catalog)
+        source = self.path if path is None else Path(path).expanduser().resolve()
+        self.people = load_people(source, self.scan.scene_id, self.catalog)
+        self.path = source
         self._forget()
 
     # ------------------------------------------------------------------ pictures

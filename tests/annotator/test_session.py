@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import json
 import math
 
 import cv2
 import numpy as np
 import pytest
 
+from havln_mj.annotator.placements import HA3D_NAME
 from havln_mj.annotator.plan import scene_plan
 from havln_mj.annotator.session import AnnotationSession
 from havln_mj.errors import InvalidArgumentError, UnknownViewpointError
@@ -102,3 +104,15 @@ def test_preview_is_an_h264_clip_of_the_person(session, scan, tmp_path):
     clip.write_bytes(session.preview_mp4(a))
     info = probe(clip)
     assert info["codec"] == "h264" and info["frames"] == 40 and info["size"] == (96, 72)
+
+
+def test_a_swapped_activity_is_explained(session, scan):
+    """HA3D's file may seat someone; the simulator stands them up, and the page says so."""
+    sitting = next(a for a in session.catalog if a.needs_seat)
+    a, _ = _pair(scan)
+    sentence = f"{HA3D_NAME[sitting.region]}:{sitting.text}"
+    session.path.write_text(json.dumps({"proc-0": {a: [sentence, 0, 0]}}))
+    session.load()
+    (p,) = session.people_json()
+    assert p["activity"] == sitting.id and p["sentence"] == sentence
+    assert p["plays"] != sitting.id and "sitting needs a seat" in p["note"]

@@ -140,7 +140,7 @@ function drawPeople() {
                  class: "facing" }, g);
     const dot = el("circle", { cx: v.x, cy: -v.y, r: 0.24, "data-vp": p.viewpoint,
                                class: p.viewpoint === state.person ? "person sel" : "person" }, g);
-    el("title", {}, dot).textContent = `${p.plays_text} — ${p.viewpoint}`;
+    el("title", {}, dot).textContent = `${said(p)} — ${p.viewpoint}`;
     dot.addEventListener("pointerdown", (ev) => startDrag(ev, p.viewpoint));
   }
   $("count").textContent = `(${state.people.length})`;
@@ -151,12 +151,17 @@ function drawPeople() {
     li.dataset.vp = p.viewpoint;
     li.className = p.viewpoint === state.person ? "sel" : "";
     li.innerHTML = "<span></span><small></small>";
-    li.firstChild.textContent = p.plays_text;
+    li.firstChild.textContent = said(p);
     li.lastChild.textContent = `${p.sentence.split(":")[0]} · motion ${p.model} · ` +
       `facing ${Math.round(p.heading_deg)}° · ${p.viewpoint}`;
     li.addEventListener("click", () => selectPerson(p.viewpoint));
     list.appendChild(li);
   }
+}
+
+// What a person does, as the placement file says it (its sentence without the region).
+function said(p) {
+  return p.sentence.slice(p.sentence.indexOf(":") + 1);
 }
 
 function svgPoint(ev) {
@@ -199,10 +204,17 @@ function startDrag(ev, from) {
 
 // ---------------------------------------------------------------- selection and view
 
+function showLevel(level) {
+  if (level === state.level) return;
+  state.level = level;
+  $("level").value = level;
+  drawMap();
+}
+
 function selectViewpoint(id) {
   const v = vpById.get(id);
   state.vp = id;
-  if (v.level !== state.level) { state.level = v.level; $("level").value = v.level; drawMap(); }
+  showLevel(v.level);
   $("vpinfo").textContent = `Viewpoint ${id}` + (v.region_name ? ` · ${v.region_name}` : "") +
     (v.included ? "" : " · excluded from navigation");
   if (!state.person) {
@@ -223,15 +235,15 @@ function selectPerson(vp) {
     $("model").value = p.model;
     $("heading").value = Math.round(p.heading_deg);
     const v = vpById.get(vp);
-    if (!state.vp || state.vp === vp) {  // stand beside them rather than inside them
-      const vps = state.plan.viewpoints;
-      const near = state.plan.edges.filter(([i, j]) => vps[i].id === vp || vps[j].id === vp)
-        .map(([i, j]) => (vps[i].id === vp ? vps[j] : vps[i]));
-      if (near.length) {
-        state.vp = near[0].id;
-        state.heading = (Math.atan2(v.x - near[0].x, v.y - near[0].y) * 180 / Math.PI + 360) % 360;
-        $("vpinfo").textContent = `Viewpoint ${state.vp} (looking at the person)`;
-      }
+    showLevel(v.level);
+    // Stand on a neighbouring viewpoint, looking at them.
+    const vps = state.plan.viewpoints;
+    const near = state.plan.edges.filter(([i, j]) => vps[i].id === vp || vps[j].id === vp)
+      .map(([i, j]) => (vps[i].id === vp ? vps[j] : vps[i]));
+    if (near.length) {
+      state.vp = near[0].id;
+      state.heading = (Math.atan2(v.x - near[0].x, v.y - near[0].y) * 180 / Math.PI + 360) % 360;
+      $("vpinfo").textContent = `Viewpoint ${state.vp} (looking at the person)`;
     }
     $("preview").src = `/api/preview.mp4?viewpoint=${encodeURIComponent(vp)}&v=${state.version}`;
   }
@@ -286,10 +298,7 @@ function showForm() {
   $("move").disabled = !p || !state.vp || occupied;
   $("delete").disabled = !p;
   $("deselect").disabled = !p;
-  $("plays").textContent = p && p.plays !== p.activity
-    ? `The simulator plays instead: “${p.plays_text}” (a walking activity needs a ` +
-      "neighbouring viewpoint on the same floor, 1–6 m away)."
-    : "";
+  $("plays").textContent = p ? p.note : "";
   if (!p) $("preview").removeAttribute("src");
 }
 
@@ -314,7 +323,7 @@ function movePerson(from, to) {
 // ---------------------------------------------------------------- start
 
 function wire() {
-  $("level").addEventListener("change", (e) => { state.level = Number(e.target.value); drawMap(); });
+  $("level").addEventListener("change", (e) => showLevel(Number(e.target.value)));
   $("region").addEventListener("change", (e) => { setRegion(e.target.value); editPerson(); });
   for (const id of ["activity", "model", "heading"]) $(id).addEventListener("change", editPerson);
   $("left").onclick = () => turn(-30, 0);
