@@ -5,7 +5,9 @@
 Each scene is built in its own process (scan folder, collision geometry, compiled world), so
 later runs load from the cache at once. Run ``havln_mj scenes build --help`` for options.
 ``havln_mj dataset build --scenes <ids...> --split <name>`` writes an HA-R2R style split of
-generated episodes (see :mod:`havln_mj.tasks.procedural`).
+generated episodes (see :mod:`havln_mj.tasks.procedural`). ``havln_mj annotate --scene <id>``
+serves a local page to place people and save them as HA3D placements
+(see :mod:`havln_mj.annotator`).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from havln_mj.annotator import command as annotate_command
 from havln_mj.errors import HavlnError
 from havln_mj.sim.prebuild import build_scene
 from havln_mj.sim.world import COLLISION_MODES
@@ -129,9 +132,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     viewer.add_arguments(
         sub.add_parser("view", help="the live MuJoCo viewer with keyboard control of the agent")
     )
+    annotate_command.add_parser(sub)
     args = parser.parse_args(argv)
     if args.group == "view":
         return viewer.main(args)
+    if args.group == "annotate":
+        try:
+            return annotate_command.annotate(args)
+        except HavlnError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
     if args.group == "dataset":
         if args.episodes_per_scene < 1:
             parser.error(f"--episodes-per-scene must be at least 1, got {args.episodes_per_scene}")
