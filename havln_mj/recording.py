@@ -21,6 +21,7 @@ import numpy as np
 
 from havln_mj.errors import HavlnError
 from havln_mj.frames import heading_to, wrap_angle
+from havln_mj.render.video import VideoWriter
 from havln_mj.sim.crowd import COLLISION_DISTANCE
 
 OUTPUTS = {
@@ -101,27 +102,20 @@ def _alive(pid: int) -> bool:
 
 
 class _Video:
-    """An MP4 file written frame by frame (opened at the first frame, whose size it takes)."""
+    """An H.264 MP4 file written frame by frame (opened at the first frame, whose size it takes)."""
 
     def __init__(self, path: Path, fps: float) -> None:
         self.path, self.fps = path, fps
-        self._writer = None
+        self._writer: VideoWriter | None = None
 
     def write(self, rgb: np.ndarray) -> None:
-        import cv2
-
         if self._writer is None:
-            h, w = rgb.shape[:2]
-            self._writer = cv2.VideoWriter(
-                str(self.path), cv2.VideoWriter_fourcc(*"mp4v"), self.fps, (w, h)
-            )
-            if not self._writer.isOpened():
-                raise HavlnError(f"cannot open an MP4 writer for {self.path}")
-        self._writer.write(cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
+            self._writer = VideoWriter(self.path, self.fps, (rgb.shape[1], rgb.shape[0]))
+        self._writer.write(rgb)
 
     def close(self) -> None:
         if self._writer is not None:
-            self._writer.release()
+            self._writer.close()
 
 
 class Recording:
@@ -143,6 +137,7 @@ class Recording:
         self.video = _Video(video, fps)
         self.frames, self.render_s = 0, 0.0
         self.tracks: list[list[tuple[float, ...]]] = []
+        self.collisions: list[np.ndarray] = []  # where the body was within 1 m of someone
         self.episode, self.n_episodes = 0, 0
         self._best: tuple[float, np.ndarray | None] = (-1.0, None)
         sim.set_film(fps, self._frame, ("go1/chase",) if chase else ())
@@ -157,7 +152,9 @@ class Recording:
             pelvis = self.crowd.positions(np.array([t]))[0]
             near = float(np.min(np.hypot(*(pelvis[:, :2] - pose[:2]).T)))
         text = f"{self.label}  episode {self.episode}/{self.n_episodes}  t={t:5.1f}s"
-        text += "  COLLISION" if near <= COLLISION_DISTANCE else ""
+        if near <= COLLISION_DISTANCE:
+            text += "  COLLISION"
+            self.collisions.append(np.array(pose[:3]))
         cv2.putText(image, text, (8, 20), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (255, 255, 255), 1)
         self.video.write(image)
         self.frames += 1
@@ -266,8 +263,21 @@ class Recording:
         if best is not None:
             cv2.imwrite(str(path), cv2.cvtColor(best, cv2.COLOR_RGB2BGR))
 
-    def write_map(self, path: Path, scan, collision: str, episodes, records: list[dict]) -> None:
-        """Writes the top-down map of the first episode's level (walked area shaded)."""
+    def write_map(
+        self,
+        path: Path,
+        scan,
+        collision: str,
+        episodes,
+        records: list[dict],
+        walked: Sequence[Sequence[tuple[float, ...]]] | None = None,
+    ) -> None:
+        """Writes the top-down map of the first episode's level.
+
+        The planned paths, the tracks walked (``walked``, default this recording's: pass a
+        robot's to show where it really went), the people's tracks, where the agent came
+        within 1 m of someone, and the walkable area shaded.
+        """
         from havln_mj.render.topdown import draw_topdown
         from havln_mj.scene.navgrid import NavGrid
         from havln_mj.sim.world import WorldOptions, build_world
@@ -283,6 +293,9 @@ class Recording:
                     if abs(graph.floor_z(ep.goal) - level) < 0.5:
                         d = navgrid.distance(graph.position(ep.start), graph.position(ep.goal))
                         rec["grid_geodesic_m"] = round(d, 3) if math.isfinite(d) else None
+        tracks = [np.array(t, float).reshape(-1, 4) for t in (walked or self.tracks)]
+        times = np.unique([row[0] for t in self.tracks for row in t] or [0.0])
+        times = times[:: max(1, len(times) // 300)]
         draw_topdown(
             path,
             graph,
@@ -293,4 +306,7 @@ class Recording:
             title=scan.description,
             navgrid=navgrid,
             people=self.crowd.positions(np.array([0.0]))[0],
+            walked=[t[:, 1:] for t in tracks if len(t)],
+            people_tracks=self.crowd.positions(times) if len(self.crowd) else None,
+            collisions=np.array(self.collisions).reshape(-1, 3),
         )

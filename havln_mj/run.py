@@ -247,15 +247,16 @@ def run(args: argparse.Namespace) -> dict:
         point = Recording(sim, crowd, stage / OUTPUTS["video"], args.fps, "point body")
         records = point.walk_all(scene, paths, walk)
         sim.close()
-        go1 = None
+        go1, walked = None, None
         if args.robot == "go1":
             print("walking the episodes with the GO1 ...", flush=True)
             sim = make_simulator(args, "go1")
             robot = Recording(sim, crowd, stage / OUTPUTS["go1_video"], args.fps, "GO1", True)
             go1 = robot.compare(scene, paths, walk, records)
+            walked = robot.tracks  # the map shows where the robot really went
             sim.close()
         point.write_frame(stage / OUTPUTS["frame"])
-        point.write_map(stage / OUTPUTS["topdown"], scan, args.collision, episodes, records)
+        point.write_map(stage / OUTPUTS["topdown"], scan, args.collision, episodes, records, walked)
         summary = {
             "havln_mj": __version__,
             "scene": scan.scene_id,
