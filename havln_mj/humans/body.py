@@ -72,7 +72,7 @@ class BodyShape:
     """A person's size and look.
 
     Attributes:
-        height: Standing height in metres (1.5–1.95).
+        height: Standing height in metres (1.0–1.95).
         girth: Limb and trunk thickness relative to average build (0.85–1.25).
         skin: Skin RGB.
         top: Shirt RGB.
