@@ -154,15 +154,18 @@ def _surface_map(template: np.ndarray, faces: np.ndarray, points: np.ndarray):
 
 
 def _corner_uvs(model, template, faces, dec_v, dec_f) -> np.ndarray:
-    """UV ``(F', 3, 2)`` of each decimated face corner, from the template face under it."""
+    """UV ``(F', 3, 2)`` of each decimated face corner, from the template face under it.
+
+    All three corners take the UV chart of the template face under the face's centroid
+    (extrapolated affinely past that face), so no face straddles two charts.
+    """
     uv = model.texture_coordinates.numpy()
     fuv = model.face_texture_coordinate_indices.numpy()
     tri_v = dec_v[dec_f]  # (F', 3, 3)
-    # A point just inside each corner picks the UV chart of the face's own interior.
-    inner = 0.8 * tri_v + 0.2 * tri_v.mean(axis=1, keepdims=True)
-    tri, _ = _surface_map(template, faces, inner.reshape(-1, 3))
-    bary = _barycentric(tri_v.reshape(-1, 3), template[faces[tri]])
-    return np.einsum("nk,nkc->nc", bary, uv[fuv[tri]]).reshape(-1, 3, 2)
+    tri, _ = _surface_map(template, faces, tri_v.mean(axis=1))
+    src = np.repeat(tri, 3)
+    bary = _barycentric(tri_v.reshape(-1, 3), template[faces[src]])
+    return np.einsum("nk,nkc->nc", bary, uv[fuv[src]]).reshape(-1, 3, 2)
 
 
 def _render_vertices(dec_f: np.ndarray, corner_uv: np.ndarray):

@@ -31,7 +31,7 @@ from havln_mj.humans.skeleton import (
 )
 
 PELVIS_HEIGHT_FRACTION = 0.57  # our clips stand the pelvis this high (knees soft), × height
-OVERLAP_WEIGHT = 0.3  # a rigid piece also keeps faces this much bound to its joint
+OVERLAP_WEIGHT = 0.45  # a rigid piece also keeps faces this much bound to its joint
 
 # Limb joints corrected to our rest bone, by the child their bone points at.
 _LIMB_CHILD = {}
@@ -101,15 +101,32 @@ class AnnyRig:
         t = positions - np.einsum("...jab,jb->...ja", r, self.anchors)
         return r, t
 
-    def skin(self, positions: np.ndarray, quats: np.ndarray) -> np.ndarray:
-        """Posed vertices ``(V, 3)`` by linear blend skinning of one pose (``(24, 3)``, ``(24, 4)``)."""
-        r, t = self.transforms(positions, quats)
+    def skin(
+        self,
+        positions: np.ndarray,
+        quats: np.ndarray,
+        rest: np.ndarray | None = None,
+        index: np.ndarray | None = None,
+        weight: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Posed vertices ``(V, 3)`` by linear blend skinning of one pose.
+
+        Args:
+            positions: World joint positions ``(24, 3)``.
+            quats: World joint orientations ``(24, 4)``.
+            rest: Rest vertices (default: the body's).
+            index: The 4 joints of each vertex ``(V, 4)`` (default: the topology's).
+            weight: Their weights ``(V, 4)`` (default: the topology's).
+        """
         topo = self.body.topology
+        rest = self.body.vertices if rest is None else rest
+        index = topo.joint_index if index is None else index
+        weight = topo.joint_weight if weight is None else weight
+        r, t = self.transforms(positions, quats)
         # Blend the four 3×4 transforms of each vertex, then apply the blend once.
         m = np.concatenate([r, t[:, :, None]], axis=2)  # (24, 3, 4)
-        blend = np.einsum("vk,vkab->vab", topo.joint_weight, m[topo.joint_index])
-        v = self.body.vertices
-        return np.einsum("vab,vb->va", blend[:, :, :3], v) + blend[:, :, 3]
+        blend = np.einsum("vk,vkab->vab", weight, m[index])
+        return np.einsum("vab,vb->va", blend[:, :, :3], rest) + blend[:, :, 3]
 
     def local_vertices(self, joint: int, vertex_ids: np.ndarray) -> np.ndarray:
         """Rest vertices in joint ``joint``'s frame (as a rigid piece on its mocap body)."""

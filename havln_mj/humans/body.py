@@ -9,7 +9,8 @@ tables; colours are drawn from small palettes of skin tones and clothes.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -21,6 +22,9 @@ from havln_mj.humans.skeleton import (
     MIN_HEIGHT,
     rest_offsets,
 )
+
+if TYPE_CHECKING:
+    from havln_mj.humans.anny_mujoco import AnnyLook
 
 SKIN_TONES = (
     (0.96, 0.80, 0.69),
@@ -78,6 +82,7 @@ class BodyShape:
         top: Shirt RGB.
         bottom: Trousers RGB.
         shoes: Shoe RGB.
+        look: An Anny body and outfit to draw instead of the capsules (None: capsules).
     """
 
     height: float
@@ -86,6 +91,7 @@ class BodyShape:
     top: tuple[float, float, float] = CLOTHES[1]
     bottom: tuple[float, float, float] = TROUSERS[0]
     shoes: tuple[float, float, float] = SHOES[0]
+    look: AnnyLook | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         if not MIN_HEIGHT <= self.height <= MAX_HEIGHT:
@@ -97,11 +103,14 @@ class BodyShape:
 
     @property
     def offsets(self) -> np.ndarray:
-        """Rest joint offsets ``(24, 3)`` (see ``skeleton.rest_offsets``)."""
-        return rest_offsets(self.height)
+        """Rest joint offsets ``(24, 3)``: the Anny body's, else ``skeleton.rest_offsets``."""
+        return self.look.rig.offsets if self.look is not None else rest_offsets(self.height)
 
     def colour(self, part: str) -> tuple[float, float, float]:
-        """RGB of a body part."""
+        """RGB of a body part (the Anny look's outfit, when there is one)."""
+        if self.look is not None:
+            o = self.look.outfit
+            return {"skin": o.skin, "top": o.top, "bottom": o.bottom_rgb, "shoes": o.shoes}[part]
         return {"skin": self.skin, "top": self.top, "bottom": self.bottom, "shoes": self.shoes}[
             part
         ]

@@ -28,11 +28,15 @@ import numpy as np
 
 from havln_mj.errors import MalformedDataError, MissingDataError
 from havln_mj.frames import heading_to
+from havln_mj.humans.anny_data import load_anny_catalog
+from havln_mj.humans.anny_mujoco import AnnyLook
+from havln_mj.humans.anny_rig import fit
 from havln_mj.humans.body import BodyShape, random_body
 from havln_mj.humans.catalog import HA3D_REGIONS, Activity, Catalog, load_catalog, make_clip
 from havln_mj.humans.clip import Clip
 from havln_mj.humans.crowd import Crowd, Person
 from havln_mj.humans.loaders import LoadedMotion, haps_dir_name
+from havln_mj.humans.outfits import random_outfit
 from havln_mj.humans.skeleton import MAX_HEIGHT, MIN_HEIGHT
 from havln_mj.humans.skinned import Skin
 from havln_mj.humans.smpl_model import SmplModel
@@ -54,10 +58,13 @@ class Sources:
     Attributes:
         haps: HAPS motions by prompt folder name (``loaders.load_haps_folder``), or None.
         smpl: An SMPL model to skin people with, or None.
+        anny: Draw people as bodies of the shipped Anny catalog, dressed (else as capsule
+            mannequins); an SMPL model takes precedence.
     """
 
     haps: dict[str, list[LoadedMotion]] | None = None
     smpl: SmplModel | None = None
+    anny: bool = True
 
     def haps_for_region(self, code: str) -> list[LoadedMotion]:
         """The HAPS motions whose prompt's region is ``code``."""
@@ -78,6 +85,24 @@ def _letters(text: str) -> str:
 
 # HAPS folder names replace ' ' and '/' by '_': match their regions on letters only.
 _HAPS_REGION = {_letters(name): code for name, code in HA3D_REGIONS.items()}
+
+
+def anny_shape(rng: np.random.Generator, base: BodyShape | None = None) -> BodyShape:
+    """A random catalog body, fitted and dressed, as a shape (its height fits its clips).
+
+    Args:
+        rng: The source of the choice of body, outfit and fabric.
+        base: Shape whose girth the capsule stand-in keeps (default: average).
+    """
+    catalog = load_anny_catalog()
+    body = catalog.bodies[int(rng.integers(len(catalog)))]
+    outfit = random_outfit(rng, body)
+    rig = fit(body)
+    look = AnnyLook(rig, outfit, int(rng.integers(2**31)))
+    girth = base.girth if base is not None else 1.0
+    return BodyShape(
+        rig.clip_height, girth, outfit.skin, outfit.top, outfit.bottom_rgb, outfit.shoes, look
+    )
 
 
 def people_count(regions: Regions) -> int:
@@ -137,6 +162,8 @@ class _Builder:
 
     def body(self) -> tuple[BodyShape, Skin | None]:
         shape = random_body(self.rng)
+        if self.sources.anny and self.sources.smpl is None:
+            return anny_shape(self.rng, shape), None
         skin = self.sources.skin(self.rng)
         if skin is not None:
             # Motions are made for the skin's own height, so its feet meet the floor.
