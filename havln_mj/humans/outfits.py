@@ -123,6 +123,7 @@ def _landmarks(body: AnnyBody) -> dict[str, np.ndarray | float]:
         "waist_z": float(a[j["pelvis"], 2] + 0.35 * (a[j["spine1"], 2] - a[j["pelvis"], 2])),
         "neck_z": float(0.6 * a[j["neck"], 2] + 0.4 * a[j["spine3"], 2]),
         "knee_z": float(a[j["left_knee"], 2]),
+        "hip_z": float(a[j["left_hip"], 2]),
         "ankle_z": float(a[j["left_ankle"], 2]),
         "front_y": float(a[j["neck"], 1]),
     }
@@ -162,7 +163,7 @@ def part_labels(
     hem = {
         "trousers": lm["ankle_z"] + 0.03,
         "shorts": lm["knee_z"] + 0.08,
-        "skirt": lm["knee_z"] + 0.25,  # briefs under the skirt; the skirt itself is geometry
+        "skirt": lm["hip_z"] - 0.1,  # briefs under the skirt; the skirt itself is geometry
     }[outfit.bottom]
     out[legs & (z > hem)] = BOTTOM
     feet = np.isin(owner, [JOINT[n] for n in ("left_ankle", "right_ankle", "left_foot", "right_foot")])
