@@ -112,7 +112,7 @@ def crowd_frames(scenes: list[str], style: str, per_scene: int) -> np.ndarray:
     tiles = []
     for scene in scenes:
         scan = load_scan(scene)
-        crowd = populate(scan, np.random.default_rng(0))
+        crowd = populate(scan, np.random.default_rng(0), together=0.5)
         spec, _, _ = world_spec(scan, WorldOptions(collision="none"))
         drawing = PeopleDrawing.from_crowd(crowd, style)
         drawing.add_to(spec)

@@ -37,6 +37,7 @@ from havln_mj.humans.clip import Clip
 from havln_mj.humans.crowd import Crowd, Person
 from havln_mj.humans.loaders import LoadedMotion, haps_dir_name
 from havln_mj.humans.outfits import random_outfit
+from havln_mj.humans.together import conversation, handover, side_by_side
 from havln_mj.humans.skeleton import MAX_HEIGHT, MIN_HEIGHT
 from havln_mj.humans.skinned import Skin
 from havln_mj.humans.smpl_model import SmplModel
@@ -207,6 +208,7 @@ def populate(
     catalog: Catalog | None = None,
     count: int | None = None,
     sources: Sources | None = None,
+    together: float = 0.0,
 ) -> Crowd:
     """People placed in ``scan`` by HA3D's rule.
 
@@ -216,6 +218,9 @@ def populate(
         catalog: Activities by region (default: the built-in catalog).
         count: Head count (default: ``people_count``).
         sources: User-supplied motions and SMPL model.
+        together: Chance that a placed person is joined by others (a conversation of two or
+            three, someone handing them something, a companion walking beside them; see
+            :mod:`havln_mj.humans.together`). 0 keeps HA3D's one person per spot.
     """
     catalog = catalog or load_catalog()
     build = _Builder(rng, sources)
@@ -250,7 +255,7 @@ def populate(
                 break
         else:
             continue  # nothing this region offers fits here
-        anchor, text = np.array([pos[0], pos[1], floor]), ""
+        anchor, text, path = np.array([pos[0], pos[1], floor]), "", None
         if activity.needs_seat:
             seat = min(seats, key=lambda o: np.linalg.norm(o.bbox[:2] - pos[:2]))
             used_seats.add(seat.index)
@@ -271,8 +276,32 @@ def populate(
                 text = clip.name.split(":", 1)[-1]
             else:
                 clip = make_clip(activity, body[0].height, rng)
-        people.append(build.person(body, clip, anchor, heading, activity, vp, text))
+        person = build.person(body, clip, anchor, heading, activity, vp, text)
+        if together > 0 and not activity.needs_seat and rng.random() < together:
+            people += _group(person, activity, path, build)
+        else:
+            people.append(person)
     return Crowd(people)
+
+
+def _group(person: Person, activity: Activity, path: np.ndarray | None, build: _Builder):
+    """``person`` joined by others: walking beside them, or talking or handing something."""
+    rng = build.rng
+
+    def body() -> BodyShape:
+        return build.body()[0]
+
+    if path is not None:
+        d = path[-1] - path[0]
+        side = np.array([d[1], -d[0]]) / max(float(np.linalg.norm(d)), 1e-9)
+
+        def beside(height: float, offset: float):
+            return make_clip(activity, height, rng, path=path + offset * side)
+
+        return side_by_side(person, rng, body, beside)
+    if rng.random() < 0.3:
+        return handover(person, rng, body)
+    return conversation(person, rng, body, int(rng.integers(2, 4)))
 
 
 def read_ha3d_placements(path: Path | str) -> dict[str, dict[str, tuple[str, int, float]]]:

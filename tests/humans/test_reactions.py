@@ -87,3 +87,21 @@ def test_a_person_glances_at_a_near_agent():
     to_agent = np.array([1.2, 1.8]) - pos[1, head, :2]
     cos = lambda u, v: u @ v / np.linalg.norm(u) / np.linalg.norm(v)  # noqa: E731
     assert cos(after, to_agent) > cos(before, to_agent) + 0.1
+
+
+def test_same_seed_same_crowd_motions_and_groups():
+    from havln_mj.humans.population import populate
+    from havln_mj.scene.scan import load_scan
+
+    scan = load_scan("proc-0")
+    a = populate(scan, np.random.default_rng(5), together=1.0)
+    b = populate(scan, np.random.default_rng(5), together=1.0)
+    assert [p.shape.look.rig.body.id for p in a.people] == [
+        p.shape.look.rig.body.id for p in b.people
+    ]
+    assert [p.shape.look.outfit for p in a.people] == [p.shape.look.outfit for p in b.people]
+    t = np.linspace(0, 20, 41)
+    np.testing.assert_array_equal(a.positions(t), b.positions(t))
+    np.testing.assert_array_equal(a.pose(3.3)[1], b.pose(3.3)[1])
+    groups = {p.activity for p in a.people if p.activity.startswith("together/")}
+    assert groups and len(a) > len(populate(scan, np.random.default_rng(5)))
