@@ -87,21 +87,28 @@ def five_people(style: str) -> np.ndarray:
     return np.concatenate(columns, axis=1)
 
 
-def _facing_views(scan, crowd: Crowd, count: int) -> list[tuple[np.ndarray, float]]:
-    """Camera spots 2.5–6 m from a person, on viewpoints, looking at them (one per person)."""
+def _facing_views(scan, crowd: Crowd, model, data, count: int) -> list[tuple[np.ndarray, float]]:
+    """Viewpoints 2.5–6 m from a person with a clear line of sight to them, looking at them."""
     graph = scan.graph
-    states = crowd.states(10.0)
-    out = []
-    for state in states:
-        best = None
-        for vp in graph.nodes:
+    walls = np.zeros(6, np.uint8)
+    walls[0] = 1  # the building's visual geometry only
+    geom_id = np.zeros(1, np.int32)
+    mujoco.mj_forward(model, data)
+    out, seen = [], []
+    for state in crowd.states(10.0):
+        if any(np.linalg.norm(state.position[:2] - s) < 2.0 for s in seen):
+            continue  # one picture per group
+        for vp in sorted(graph.nodes):
             p = graph.position(vp)
-            d = float(np.hypot(*(state.position[:2] - p[:2])))
-            if 2.5 <= d <= 6.0 and abs(graph.floor_z(vp) - (state.position[2] - 0.9)) < 0.6:
-                if best is None or abs(d - 3.5) < best[0]:
-                    best = (abs(d - 3.5), p)
-        if best is not None:
-            out.append((best[1], heading_to(best[1], state.position)))
+            ray = state.position - p
+            d = float(np.hypot(*ray[:2]))
+            if not 2.5 <= d <= 6.0 or abs(graph.floor_z(vp) - (state.position[2] - 0.9)) > 0.6:
+                continue
+            hit = mujoco.mj_ray(model, data, p, ray, walls, 1, -1, geom_id)
+            if hit < 0 or hit > 1.0:
+                out.append((p, heading_to(p, state.position)))
+                seen.append(state.position[:2])
+                break
         if len(out) == count:
             break
     return out
@@ -119,8 +126,9 @@ def crowd_frames(scenes: list[str], style: str, per_scene: int) -> np.ndarray:
         model = spec.compile()
         data = mujoco.MjData(model)
         poser = drawing.poser(model)
+        views = _facing_views(scan, crowd, model, data, per_scene)
         with Camera(model, CAMERA, 640, 480, 60.0) as cam:
-            for eye, heading in _facing_views(scan, crowd, per_scene):
+            for eye, heading in views:
                 for mesh in poser.pose(data, 10.0):
                     cam.upload_mesh(mesh)
                 PointBody(eye, heading=heading, elevation=-0.1).write(model, data)
