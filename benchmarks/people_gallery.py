@@ -65,8 +65,12 @@ def five_people(style: str) -> np.ndarray:
         type=mujoco.mjtGeom.mjGEOM_PLANE, size=(20, 20, 0.1), rgba=(0.75, 0.73, 0.70, 1)
     )
     for k in range(len(FIVE)):
-        spec.worldbody.add_camera(name=f"full{k}", pos=(1.2 * k, -3.2, 1.0), xyaxes=(1, 0, 0, 0, 0, 1))
-        spec.worldbody.add_camera(name=f"face{k}", pos=(1.2 * k, -0.9, 1.5), xyaxes=(1, 0, 0, 0, 0, 1))
+        spec.worldbody.add_camera(
+            name=f"full{k}", pos=(1.2 * k, -3.2, 1.0), xyaxes=(1, 0, 0, 0, 0, 1)
+        )
+        spec.worldbody.add_camera(
+            name=f"face{k}", pos=(1.2 * k, -0.9, 1.5), xyaxes=(1, 0, 0, 0, 0, 1)
+        )
     drawing = PeopleDrawing.from_crowd(crowd, style)
     drawing.add_to(spec)
     model = spec.compile()

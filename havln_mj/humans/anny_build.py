@@ -252,7 +252,7 @@ def build(out_dir: Path, target: int = TARGET_VERTICES) -> Path:
     rest, joints, eye_pos, heights = [], [], [], []
     params = []
     for _, *values in PHENOTYPES:
-        values = _solve_height(model, torch, dict(zip(PHENOTYPE_LABELS, values)))
+        values = _solve_height(model, torch, dict(zip(PHENOTYPE_LABELS, values, strict=False)))
         params.append([values[k] for k in PHENOTYPE_LABELS])
         verts, heads = _phenotype_rest(model, torch, values)
         v = np.einsum("nk,nkc->nc", bary, verts[faces[tri]]) @ ANNY_TO_BODY.T

@@ -199,9 +199,7 @@ def _normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
     idx = faces.ravel()
     rep = np.repeat(n, 3, axis=0)
-    out = np.stack(
-        [np.bincount(idx, rep[:, c], minlength=len(vertices)) for c in range(3)], axis=1
-    )
+    out = np.stack([np.bincount(idx, rep[:, c], minlength=len(vertices)) for c in range(3)], axis=1)
     return out / np.maximum(np.linalg.norm(out, axis=1, keepdims=True), 1e-12)
 
 

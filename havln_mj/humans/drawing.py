@@ -19,12 +19,11 @@ the ids of the meshes whose vertices changed, which each renderer must re-upload
 from __future__ import annotations
 
 import mujoco
-import numpy as np
 
 from havln_mj.humans.anny_mujoco import AnnySkinWriter
+from havln_mj.humans.crowd import Crowd
 from havln_mj.humans.mujoco_people import DRAW_STYLES, PeopleWriter, add_people
 from havln_mj.humans.skinned import SkinWriter
-from havln_mj.humans.crowd import Crowd
 
 
 class PeopleDrawing:

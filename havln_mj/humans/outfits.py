@@ -33,7 +33,13 @@ BOTTOMS = (
     (0.20, 0.28, 0.45), (0.10, 0.10, 0.12), (0.40, 0.42, 0.30),
 )  # fmt: skip
 SKIRTS = ((0.55, 0.15, 0.25), (0.15, 0.20, 0.40), (0.12, 0.12, 0.14), (0.45, 0.50, 0.30))
-SHOES = ((0.08, 0.08, 0.08), (0.35, 0.20, 0.10), (0.78, 0.78, 0.80), (0.30, 0.30, 0.35), (0.15, 0.17, 0.30))
+SHOES = (
+    (0.08, 0.08, 0.08),
+    (0.35, 0.20, 0.10),
+    (0.78, 0.78, 0.80),
+    (0.30, 0.30, 0.35),
+    (0.15, 0.17, 0.30),
+)
 HAIR = (
     (0.08, 0.06, 0.05), (0.20, 0.12, 0.07), (0.38, 0.24, 0.12), (0.62, 0.45, 0.25),
     (0.80, 0.65, 0.40), (0.45, 0.18, 0.08),
@@ -143,12 +149,10 @@ def _arm_fraction(p: np.ndarray, owner: np.ndarray, body: AnnyBody) -> np.ndarra
     return out
 
 
-def part_labels(
-    p: np.ndarray, owner: np.ndarray, body: AnnyBody, outfit: Outfit
-) -> np.ndarray:
+def part_labels(p: np.ndarray, owner: np.ndarray, body: AnnyBody, outfit: Outfit) -> np.ndarray:
     """What covers each rest point ``p (N, 3)`` whose main joint is ``owner (N,)``: SKIN … BROWS."""
     lm = _landmarks(body)
-    x, y, z = p[:, 0], p[:, 1], p[:, 2]
+    _x, y, z = p[:, 0], p[:, 1], p[:, 2]
     out = np.full(len(p), SKIN, np.int8)
     trunk = np.isin(owner, [JOINT[n] for n in ("spine1", "spine2", "spine3")])
     trunk |= np.isin(owner, [JOINT["left_collar"], JOINT["right_collar"], JOINT["pelvis"]])
@@ -166,7 +170,9 @@ def part_labels(
         "skirt": lm["hip_z"] - 0.1,  # briefs under the skirt; the skirt itself is geometry
     }[outfit.bottom]
     out[legs & (z > hem)] = BOTTOM
-    feet = np.isin(owner, [JOINT[n] for n in ("left_ankle", "right_ankle", "left_foot", "right_foot")])
+    feet = np.isin(
+        owner, [JOINT[n] for n in ("left_ankle", "right_ankle", "left_foot", "right_foot")]
+    )
     feet |= np.isin(owner, [JOINT["left_knee"], JOINT["right_knee"]]) & (z < lm["ankle_z"] + 0.03)
     out[feet & (z < lm["ankle_z"] + 0.035)] = SHOES_PART
     if outfit.hair != "none":
@@ -307,9 +313,7 @@ def skirt_mesh(body: AnnyBody, segments: int = 20) -> tuple[np.ndarray, np.ndarr
     rings = [(top_z, waist_r + 0.006), (a[JOINT["left_hip"], 2], hip_r + 0.012)]
     rings.append((bottom_z, hip_r + 0.03 + 0.2 * (a[JOINT["left_hip"], 2] - bottom_z)))
     theta = np.linspace(0.0, 2 * np.pi, segments, endpoint=False)
-    verts = np.array(
-        [[r * np.sin(t), a[0, 1] + r * np.cos(t), z] for z, r in rings for t in theta]
-    )
+    verts = np.array([[r * np.sin(t), a[0, 1] + r * np.cos(t), z] for z, r in rings for t in theta])
     faces = []
     for ring in range(len(rings) - 1):
         for k in range(segments):

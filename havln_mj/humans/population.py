@@ -37,10 +37,10 @@ from havln_mj.humans.clip import Clip
 from havln_mj.humans.crowd import Crowd, Person
 from havln_mj.humans.loaders import LoadedMotion, haps_dir_name
 from havln_mj.humans.outfits import random_outfit
-from havln_mj.humans.together import conversation, handover, side_by_side
 from havln_mj.humans.skeleton import MAX_HEIGHT, MIN_HEIGHT
 from havln_mj.humans.skinned import Skin
 from havln_mj.humans.smpl_model import SmplModel
+from havln_mj.humans.together import conversation, handover, side_by_side
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.regions import Regions, SceneObject
 from havln_mj.scene.scan import Scan

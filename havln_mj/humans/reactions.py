@@ -95,7 +95,7 @@ class ReactiveCrowd:
         self._track_t = np.concatenate([self._track_t, times])
         self._track_xy = np.concatenate([self._track_xy, xy])
         # Clock steps after the earliest changed agent position must be recomputed.
-        keep = int(math.floor(max(last, 0.0) / STEP_S)) + 1 if last > -math.inf else 1
+        keep = math.floor(max(last, 0.0) / STEP_S) + 1 if last > -math.inf else 1
         self._clock = self._clock[: max(keep, 1)]
 
     def agent_at(self, t: float | np.ndarray) -> np.ndarray | None:
@@ -128,7 +128,7 @@ class ReactiveCrowd:
 
     def _extend(self, t: float) -> None:
         """Computes walker clocks on the step grid up to past ``t``."""
-        need = int(math.floor(max(t, 0.0) / STEP_S)) + 2
+        need = math.floor(max(t, 0.0) / STEP_S) + 2
         comfort = self.reactions.comfort
         w = self._walkers
         while len(self._clock) < need:
@@ -140,7 +140,9 @@ class ReactiveCrowd:
             d_here = np.linalg.norm(here - agent, axis=1)
             d_ahead = np.linalg.norm(ahead - agent, axis=1)
             blocked = (d_ahead < comfort) & (d_ahead < d_here)
-            self._clock = np.concatenate([self._clock, (clock + np.where(blocked, 0, STEP_S))[None]])
+            self._clock = np.concatenate(
+                [self._clock, (clock + np.where(blocked, 0, STEP_S))[None]]
+            )
 
     # ------------------------------------------------------------------ the Crowd protocol
 

@@ -44,7 +44,9 @@ def conversation(
     return out
 
 
-def handover(first: Person, rng: np.random.Generator, body: Callable[[], BodyShape]) -> list[Person]:
+def handover(
+    first: Person, rng: np.random.Generator, body: Callable[[], BodyShape]
+) -> list[Person]:
     """Two people facing each other, reaching forward together: one hands the other something."""
     heading = float(rng.uniform(0, 2 * math.pi))
     ahead = np.array([math.sin(heading), math.cos(heading), 0.0])
