@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from havln_mj.errors import InvalidArgumentError
+from havln_mj.humans.outfits import SKIN_TONES
 from havln_mj.humans.skeleton import (
     FOOT_HEIGHT_FRACTION,
     JOINT,
@@ -26,14 +27,6 @@ from havln_mj.humans.skeleton import (
 if TYPE_CHECKING:
     from havln_mj.humans.anny_mujoco import AnnyLook
 
-SKIN_TONES = (
-    (0.96, 0.80, 0.69),
-    (0.89, 0.68, 0.53),
-    (0.78, 0.57, 0.42),
-    (0.62, 0.43, 0.30),
-    (0.45, 0.31, 0.21),
-    (0.33, 0.22, 0.15),
-)
 CLOTHES = (
     (0.80, 0.15, 0.15),
     (0.15, 0.35, 0.75),

@@ -17,11 +17,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from havln_mj.humans.anny_data import AnnyBody
-from havln_mj.humans.body import SKIN_TONES
 from havln_mj.humans.skeleton import JOINT
 from havln_mj.humans.skinned import vertex_normals
 
 RGB = tuple[float, float, float]
+
+SKIN_TONES = (
+    (0.96, 0.80, 0.69),
+    (0.89, 0.68, 0.53),
+    (0.78, 0.57, 0.42),
+    (0.62, 0.43, 0.30),
+    (0.45, 0.31, 0.21),
+    (0.33, 0.22, 0.15),
+)
 
 TOPS = (
     (0.80, 0.15, 0.15), (0.15, 0.35, 0.75), (0.20, 0.55, 0.30), (0.90, 0.75, 0.20),
