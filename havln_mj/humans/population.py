@@ -160,11 +160,14 @@ class _Builder:
     def __init__(self, rng: np.random.Generator, sources: Sources | None) -> None:
         self.rng = rng
         self.sources = sources or Sources()
+        # Looks come from a child stream: choosing bodies and clothes leaves the placement
+        # and motion draws of ``rng`` as they were.
+        self.looks = rng.spawn(1)[0]
 
     def body(self) -> tuple[BodyShape, Skin | None]:
         shape = random_body(self.rng)
         if self.sources.anny and self.sources.smpl is None:
-            return anny_shape(self.rng, shape), None
+            return anny_shape(self.looks, shape), None
         skin = self.sources.skin(self.rng)
         if skin is not None:
             # Motions are made for the skin's own height, so its feet meet the floor.
