@@ -29,13 +29,13 @@ from havln_mj.frames import heading_to, wrap_angle
 from havln_mj.humans.crowd import Crowd
 from havln_mj.humans.mujoco_people import PeopleWriter
 from havln_mj.humans.skinned import SkinWriter
+from havln_mj.nav import NavGrid
 from havln_mj.render.camera import Camera
 from havln_mj.render.topdown import draw_topdown
 from havln_mj.robot.point_body import CAMERA, PointBody
 from havln_mj.run_go1 import run_go1
 from havln_mj.scene.ids import parse_scene_id
 from havln_mj.scene.navgraph import NavGraph
-from havln_mj.scene.navgrid import NavGrid
 from havln_mj.scene.procedural.recipe import load_recipe
 from havln_mj.scene.scan import known_scene_ids, load_scan
 from havln_mj.sim.crowd import COLLISION_DISTANCE, SAMPLE_HZ, Proximity, track_proximity

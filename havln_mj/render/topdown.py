@@ -14,8 +14,8 @@ import trimesh
 from matplotlib.collections import LineCollection
 from matplotlib.patches import Circle, Polygon, Rectangle
 
+from havln_mj.nav import NavGrid
 from havln_mj.scene.navgraph import NavGraph
-from havln_mj.scene.navgrid import NavGrid
 from havln_mj.scene.regions import Regions
 
 _PATH_COLOURS = ("#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b")
