@@ -15,15 +15,10 @@ from havln_mj.humans.crowd import Crowd
 from havln_mj.scene.connectivity import Connectivity
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.scan import Scan, load_scan
-from havln_mj.tasks.instructions import (
-    TURNS,
-    describe_route,
-    generate_instructions,
-    room_name,
-    tokenize,
-    word_count,
-)
+from havln_mj.tasks.instructions import generate_instructions, tokenize, word_count
+from havln_mj.tasks.phrases import TURNS
 from havln_mj.tasks.procedural import sample_paths, scene_crowd
+from havln_mj.tasks.route_facts import describe_route, room_name
 
 SCAN = "proc-0"
 
