@@ -58,7 +58,8 @@ from havln_mj.errors import InvalidActionError, InvalidArgumentError, NotInitial
 from havln_mj.sim.egocentric import EgoAction
 from havln_mj.sim.simulator import ROBOT_ACTIONS, Simulator
 from havln_mj.sim.state import SimState
-from havln_mj.tasks.datasets import Episode, Instruction, load_dataset
+from havln_mj.tasks.datasets import load_dataset
+from havln_mj.tasks.episodes import Episode, Instruction
 from havln_mj.tasks.rewards import SUCCESS_DISTANCE, RewardFn, StepOutcome, get_reward
 from havln_mj.tasks.vocab import Vocabulary
 

@@ -34,8 +34,8 @@ from havln_mj.frames import wrap_angle
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.sim.egocentric import EgoAction
 from havln_mj.sim.state import SimState
-from havln_mj.tasks.datasets import Episode
 from havln_mj.tasks.ego_routes import EgoRoutes, ego_plan, forward_target
+from havln_mj.tasks.episodes import Episode
 from havln_mj.tasks.planning import (
     CLEARANCE,
     SIGHT_RADIUS,

@@ -22,7 +22,7 @@ from typing import Any
 from havln_mj.errors import MalformedDataError, MissingDataError, did_you_mean
 from havln_mj.paths import asset_path
 from havln_mj.scene.regions import REGION_LABELS
-from havln_mj.tasks.datasets import REL_POSITIONS
+from havln_mj.tasks.episodes import REL_POSITIONS
 
 TURNS = ("straight", "slight left", "slight right", "left", "right", "around")
 _PERSON = ("who", "Who", "verb", "where", "Where_lead")

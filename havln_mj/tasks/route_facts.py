@@ -24,7 +24,7 @@ from havln_mj.humans.crowd import Crowd
 from havln_mj.scene.regions import REGION_LABELS, Region
 from havln_mj.scene.scan import Scan
 from havln_mj.tasks.annotate import humans_on_path
-from havln_mj.tasks.datasets import HumanOnPath
+from havln_mj.tasks.episodes import HumanOnPath
 from havln_mj.tasks.phrases import default_phrases
 
 # Turn bins in degrees of |heading change|: below the first is straight, and so on.

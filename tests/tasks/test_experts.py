@@ -14,8 +14,9 @@ from havln_mj.humans.crowd import Crowd, Person
 from havln_mj.humans.motion import idle
 from havln_mj.scene.scan import load_scan
 from havln_mj.sim.egocentric import EgoAction
-from havln_mj.tasks.datasets import Episode, load_dataset
+from havln_mj.tasks.datasets import load_dataset
 from havln_mj.tasks.ego_routes import TURN_COST, EgoRoutes, ego_plan, forward_target
+from havln_mj.tasks.episodes import Episode
 from havln_mj.tasks.experts import (
     STOP,
     WAIT,

@@ -12,7 +12,7 @@ from havln_mj.errors import MalformedDataError, MissingDataError
 from havln_mj.humans.crowd import Crowd
 from havln_mj.paths import asset_path
 from havln_mj.scene.scan import load_scan
-from havln_mj.tasks.datasets import REL_POSITIONS
+from havln_mj.tasks.episodes import REL_POSITIONS
 from havln_mj.tasks.instructions import generate_instructions
 from havln_mj.tasks.phrases import TURNS, default_phrases, load_phrases
 from havln_mj.tasks.procedural import sample_paths
