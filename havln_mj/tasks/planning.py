@@ -9,11 +9,12 @@
   blocked viewpoints masked out, searched by ``scipy.sparse.csgraph``.
 * :func:`graph_teacher`: R2R's teacher action towards the next viewpoint of a path.
 
-Ties between equally short paths are broken as R2R does. With nothing blocked a path is
-``NavGraph.shortest_path``; around blocked viewpoints each viewpoint of the path is reached
-from the neighbour that a Dijkstra search popping (distance, file order) settles first: of
-the neighbours that lie on a shortest path to it, the nearest to the start, then the first
-in the connectivity file.
+Among equally short paths, with nothing blocked a path is ``NavGraph.shortest_path`` (the
+choice that follows every R2R val_seen path); around blocked viewpoints each viewpoint of
+the path is reached from the neighbour a Dijkstra search popping (distance, file order)
+settles first: of the neighbours on a shortest path to it, the nearest to the start, then
+the first in the connectivity file. (A graph with edges of length 0 is traced along
+scipy's own search tree instead.)
 """
 
 from __future__ import annotations
@@ -119,6 +120,7 @@ class PathPlanner:
         lengths = csr_matrix((np.r_[w, w], (np.r_[a, b], np.r_[b, a])), shape=(n, n))
         lengths.sort_indices()
         self._lengths = lengths.data.copy()
+        self._zero_length = bool((w == 0).any())  # coincident viewpoints joined by an edge
         self._search = lengths  # its weights are rewritten by every search
         # Each node's neighbours and edge lengths, for tracing a path back.
         self._around = [
@@ -159,19 +161,27 @@ class PathPlanner:
         closed = [self._order[v] for v in blocked if v in self._order]
         search.data[np.isin(search.indices, closed)] = np.inf
         s, g = self._order[start], self._order[goal]
-        dist = dijkstra(search, indices=s).tolist()
+        dist, pred = dijkstra(search, indices=s, return_predecessors=True)
         if math.isinf(dist[g]):
             return None
         path = [g]
-        while path[-1] != s:
-            path.append(self._reached_from(path[-1], dist, weighted))
+        if self._zero_length:
+            # Equal distances across an edge: the rule below could go round in a circle, so
+            # follow the search's own tree (still a shortest path, ties as scipy settles them).
+            while path[-1] != s:
+                path.append(int(pred[path[-1]]))
+        else:
+            dist = dist.tolist()
+            while path[-1] != s:
+                path.append(self._reached_from(path[-1], dist, weighted))
         return [graph.nodes[k] for k in reversed(path)]
 
     def _reached_from(self, u: int, dist: list[float], weighted: bool) -> int:
         """The neighbour a Dijkstra popping (distance, file order) reaches ``u`` from first.
 
         Of the neighbours on a shortest path to ``u``, the nearest to the start, then the
-        first in file order: the first of them popped, whose relaxation of ``u`` stands.
+        first in file order: the first of them popped (edges being longer than 0), whose
+        relaxation of ``u`` stands.
         """
         du = dist[u]
         return min(

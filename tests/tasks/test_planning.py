@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from havln_mj.errors import UnknownViewpointError
+from havln_mj.scene.connectivity import Connectivity
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.scan import load_scan
 from havln_mj.tasks.planning import PathPlanner, blocked_nodes, plan_path
@@ -105,3 +106,33 @@ def test_planner_edge_cases():
     assert plan_path(graph, a, b, boxed, weighted=False) is None
     with pytest.raises(UnknownViewpointError, match="nowhere"):
         planner.plan("nowhere", b, {a})
+
+
+def _toy_graph(xy, edges):
+    ids = list(xy)
+    n = len(ids)
+    poses = np.tile(np.eye(4), (n, 1, 1))
+    for i, (x, y) in enumerate(xy.values()):
+        poses[i, 0, 3], poses[i, 1, 3], poses[i, 2, 3] = x, y, 1.5
+    unob = np.zeros((n, n), bool)
+    for a, b in edges:
+        unob[ids.index(a), ids.index(b)] = unob[ids.index(b), ids.index(a)] = True
+    return NavGraph(Connectivity(ids, poses, [True] * n, ~np.eye(n, dtype=bool), unob, [1.5] * n))
+
+
+def test_zero_length_edges_still_give_a_shortest_path():
+    # d0 and d1 are the same place; the way round through e is longer.
+    xy = {"a": (0, 0), "d1": (1, 0), "d0": (1, 0), "g": (2, 0), "e": (1, 3)}
+    edges = [("a", "d1"), ("a", "d0"), ("d1", "d0"), ("d1", "g"), ("d0", "g"), ("a", "e")]
+    graph = _toy_graph(xy, [*edges, ("e", "g")])
+    planner = PathPlanner(graph)
+    for blocked in ({"e"}, {"d1"}, {"d0"}, {"d0", "e"}):
+        path = planner.plan("a", "g", blocked)
+        assert path[0] == "a" and path[-1] == "g" and not set(path) & blocked
+        assert graph.path_length(path) == pytest.approx(2.0)
+    assert len(planner.plan("a", "g", {"d1"}, weighted=False)) == 3
+    # Three viewpoints at one place, all joined: equal distances all round the triangle.
+    xy = {"y": (0, 0), "x": (0, 0), "s": (0, 0), "g": (1, 0), "z": (5, 5)}
+    edges = [("s", "x"), ("s", "y"), ("x", "y"), ("x", "g"), ("y", "g")]
+    path = PathPlanner(_toy_graph(xy, edges)).plan("s", "g", {"z"})
+    assert path[0] == "s" and path[-1] == "g" and len(path) == len(set(path))
