@@ -22,7 +22,6 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from functools import cached_property
-from itertools import pairwise
 
 import numpy as np
 from scipy.sparse import csr_matrix
@@ -122,11 +121,10 @@ class PathPlanner:
         self._lengths = lengths.data.copy()
         self._zero_length = bool((w == 0).any())  # coincident viewpoints joined by an edge
         self._search = lengths  # its weights are rewritten by every search
-        # Each node's neighbours and edge lengths, for tracing a path back.
-        self._around = [
-            list(zip(lengths.indices[lo:hi].tolist(), lengths.data[lo:hi].tolist(), strict=True))
-            for lo, hi in pairwise(lengths.indptr.tolist())
-        ]
+        # The same as lists, for tracing a path back.
+        self._starts = lengths.indptr.tolist()
+        self._ends = lengths.indices.tolist()
+        self._length_list = lengths.data.tolist()
 
     @cached_property
     def _floors(self) -> tuple[np.ndarray, np.ndarray]:
@@ -183,10 +181,11 @@ class PathPlanner:
         first in file order: the first of them popped (edges being longer than 0), whose
         relaxation of ``u`` stands.
         """
+        lo, hi = self._starts[u], self._starts[u + 1]
+        ends = self._ends[lo:hi]
+        steps = self._length_list[lo:hi] if weighted else [1.0] * (hi - lo)
         du = dist[u]
-        return min(
-            (dist[v], v) for v, w in self._around[u] if dist[v] + (w if weighted else 1.0) == du
-        )[1]
+        return min((dist[v], v) for v, w in zip(ends, steps, strict=True) if dist[v] + w == du)[1]
 
 
 def plan_path(
