@@ -55,8 +55,8 @@ class RouteStep:
 
     Attributes:
         index: The edge's index.
-        turn: One of :data:`TURNS`, the heading change onto this edge (the first edge's
-            against the start heading).
+        turn: One of :data:`~havln_mj.tasks.phrases.TURNS`, the heading change onto this
+            edge (the first edge's against the start heading).
         room_from: Room name at the edge's start (None: unnamed).
         room_to: Room name at its end.
         label_to: Region label code at its end (None: no region).
