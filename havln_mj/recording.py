@@ -278,8 +278,8 @@ class Recording:
         robot's to show where it really went), the people's tracks, where the agent came
         within 1 m of someone, and the walkable area shaded.
         """
+        from havln_mj.nav import NavGrid
         from havln_mj.render.topdown import draw_topdown
-        from havln_mj.scene.navgrid import NavGrid
         from havln_mj.sim.world import WorldOptions, build_world
 
         graph = scan.graph

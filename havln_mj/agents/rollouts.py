@@ -26,7 +26,7 @@ from havln_mj.agents.observations import action_mask, observe
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.sim.egocentric import EgoAction
 from havln_mj.sim.simulator import Simulator
-from havln_mj.tasks.datasets import Instruction
+from havln_mj.tasks.episodes import Instruction
 from havln_mj.tasks.experts import ExpertContext, HumanAwareExpert
 from havln_mj.tasks.step import TaskStep
 from havln_mj.tasks.vocab import Vocabulary

@@ -26,8 +26,8 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Circle, Patch, Polygon, Rectangle
 
 from havln_mj.errors import InvalidArgumentError
+from havln_mj.nav import NavGrid
 from havln_mj.scene.navgraph import NavGraph
-from havln_mj.scene.navgrid import NavGrid
 from havln_mj.scene.regions import Regions
 
 _PATH_COLOURS = ("#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#8c564b", "#e377c2")

@@ -38,10 +38,10 @@ import numpy as np
 from havln_mj import groups
 from havln_mj.frames import heading_to, wrap_angle
 from havln_mj.humans.mujoco_people import PeopleWriter, add_people
+from havln_mj.nav import NavGrid, build_navgrids
 from havln_mj.robot.go1.model import add_go1
 from havln_mj.robot.go1.primitives import Go1Body, OnTick, PrimitiveResult
 from havln_mj.scene.navgraph import LEVEL_GAP
-from havln_mj.scene.navgrid import NavGrid, build_navgrids
 from havln_mj.scene.proxy.routes import route_floor_points
 from havln_mj.scene.scan import Scan, floor_heights
 from havln_mj.sim.crowd import NO_CROWD, Crowd, Proximity, knots_proximity

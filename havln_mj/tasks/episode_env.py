@@ -37,7 +37,8 @@ import numpy as np
 from havln_mj.errors import InvalidActionError, InvalidArgumentError, NotInitializedError
 from havln_mj.sim.body import ROBOT_ACTIONS
 from havln_mj.sim.egocentric import EgoAction
-from havln_mj.tasks.datasets import Episode, Instruction, load_dataset
+from havln_mj.tasks.datasets import load_dataset
+from havln_mj.tasks.episodes import Episode, Instruction
 from havln_mj.tasks.observations import Observations
 from havln_mj.tasks.rewards import RewardFn
 from havln_mj.tasks.step import STOP, Action, StepResult, TaskStep

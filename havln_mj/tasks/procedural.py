@@ -34,8 +34,10 @@ from havln_mj.humans.crowd import Crowd
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.scan import Scan, load_scan
 from havln_mj.tasks.annotate import crux_points
-from havln_mj.tasks.datasets import SPLITS, Episode, write_dataset
-from havln_mj.tasks.instructions import describe_route, generate_instructions, tokenize
+from havln_mj.tasks.datasets import SPLITS, write_dataset
+from havln_mj.tasks.episodes import Episode
+from havln_mj.tasks.instructions import generate_instructions, tokenize
+from havln_mj.tasks.route_facts import describe_route
 
 MIN_VIEWPOINTS, MAX_VIEWPOINTS = 4, 7  # R2R's path sizes
 MIN_DISTANCE, MAX_DISTANCE = 5.0, 20.0  # metres
