@@ -147,9 +147,9 @@ class Recording:
 
         self.tracks[-1].append((t, *pose[:3]))
         image = np.hstack([v.rgb for v in views]) if len(views) > 1 else views[0].rgb.copy()
-        near = math.inf
-        if len(self.crowd):
-            pelvis = self.crowd.positions(np.array([t]))[0]
+        near, people = math.inf, self.sim.people(i)
+        if len(people):
+            pelvis = people.positions(np.array([t]))[0]
             near = float(np.min(np.hypot(*(pelvis[:, :2] - pose[:2]).T)))
         text = f"{self.label}  episode {self.episode}/{self.n_episodes}  t={t:5.1f}s"
         if near <= COLLISION_DISTANCE:

@@ -85,6 +85,8 @@ def make_simulator(args: argparse.Namespace, body: str):
         smpl_model=args.smpl_model,
         body=body,
         legged=LeggedOptions(estimate=args.go1_estimate, camera_height=args.go1_camera_height),
+        together=args.together,
+        reactions=not args.no_reactions,
     )
     if args.connectivity_dir is not None:
         sim.setNavGraphPath(args.connectivity_dir)
@@ -98,7 +100,12 @@ def make_simulator(args: argparse.Namespace, body: str):
     sim.setSeed(args.seed)
     collision = args.collision if body == "point" else "auto"
     sim.set_world_options(
-        WorldOptions(collision=collision, offscreen=(args.width, args.height), vfov_deg=args.vfov)
+        WorldOptions(
+            collision=collision,
+            offscreen=(args.width, args.height),
+            vfov_deg=args.vfov,
+            people_style=args.people_style,
+        )
     )
     sim.initialize()
     return sim
@@ -159,6 +166,23 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     )
     p.add_argument("--no-people", action="store_true", help="leave the scene empty")
     p.add_argument(
+        "--together",
+        type=float,
+        default=0.3,
+        help="chance a person placed is joined by others (talking, walking along; default 0.3)",
+    )
+    p.add_argument(
+        "--no-reactions",
+        action="store_true",
+        help="people ignore the agent (by default walkers yield and others glance at it)",
+    )
+    p.add_argument(
+        "--people-style",
+        choices=("pieces", "skinned", "capsules"),
+        default="pieces",
+        help="how people are drawn (default pieces: dressed bodies, fastest)",
+    )
+    p.add_argument(
         "--robot",
         choices=("point", "go1"),
         default="point",
@@ -218,6 +242,7 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         (1 <= args.height <= 8192, f"--height must be in [1, 8192] pixels, got {args.height}"),
         (0 < args.vfov < 180, f"--vfov must be in (0, 180) degrees, got {args.vfov}"),
         (0 < args.fps <= 120, f"--fps must be in (0, 120], got {args.fps}"),
+        (0 <= args.together <= 1, f"--together must be a chance in [0, 1], got {args.together}"),
         (
             args.go1_camera_height is None or 0.1 <= args.go1_camera_height <= 3.0,
             f"--go1-camera-height must be in [0.1, 3] m, got {args.go1_camera_height}",

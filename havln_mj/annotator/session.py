@@ -5,7 +5,7 @@ function it uses (:func:`havln_mj.humans.population.populate_ha3d`), so the page
 activity each person will really play (a walking activity needs a neighbouring viewpoint to
 pace to; without one the simulator plays a standing activity of the region instead). Views
 are rendered through the simulator's own frame pipeline
-(:class:`havln_mj.sim.rendering.SceneView`), people posed at the asked time.
+(:class:`havln_mj.sim.point.Stage`), people posed at the asked time.
 """
 
 from __future__ import annotations
@@ -35,7 +35,8 @@ from havln_mj.humans.crowd import Crowd
 from havln_mj.humans.population import populate_ha3d
 from havln_mj.render.video import VideoWriter
 from havln_mj.scene.scan import Scan
-from havln_mj.sim.rendering import SceneView, ViewSettings
+from havln_mj.sim.frame import ViewSettings
+from havln_mj.sim.point import Stage
 from havln_mj.sim.world import WorldOptions
 
 PREVIEW_SECONDS = 4.0
@@ -85,7 +86,7 @@ class AnnotationSession:
         self.plan = scene_plan(scan)
         self.people: list[Placement] = load_people(self.path, scan.scene_id, self.catalog)
         self._crowd: Crowd | None = None
-        self._view: SceneView | None = None
+        self._view: Stage | None = None
 
     # ------------------------------------------------------------------ people
 
@@ -197,12 +198,11 @@ class AnnotationSession:
 
     # ------------------------------------------------------------------ pictures
 
-    def _scene_view(self) -> SceneView:
+    def _scene_view(self) -> Stage:
         if self._view is None:
             s = self.settings
             options = WorldOptions(collision="none", offscreen=(s.width, s.height))
-            self._view = SceneView(self.scan, options, self.crowd())
-            self._view.configure(s)
+            self._view = Stage(self.scan, options, self.crowd())
         return self._view
 
     def view_png(self, viewpoint: str, heading_deg: float, elevation_deg: float, t: float) -> bytes:
@@ -215,7 +215,7 @@ class AnnotationSession:
         pos = self.scan.graph.position(viewpoint)
         heading = math.radians(_number("heading", heading_deg))
         elevation = math.radians(_number("elevation", elevation_deg))
-        view = self._scene_view().render(pos, heading, elevation, _number("t", t))
+        view = self._scene_view().render((pos, heading, elevation), self.settings, _number("t", t))
         return _png(view.rgb)
 
     def _viewer(self, viewpoint: str, facing: float) -> np.ndarray:
@@ -267,7 +267,7 @@ class AnnotationSession:
                     pelvis = crowd.positions(np.array([t]), np.array([k]))[0, 0]
                     flat = math.hypot(*(pelvis[:2] - camera[:2]))
                     elevation = math.atan2(pelvis[2] - camera[2], max(flat, 1e-6))
-                    rgb = view.render(camera, heading_to(camera, pelvis), elevation, t).rgb
+                    rgb = view.render((camera, heading_to(camera, pelvis), elevation), s, t).rgb
                     video.write(rgb)
             return path.read_bytes()
 

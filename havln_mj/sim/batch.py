@@ -15,7 +15,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from havln_mj.sim.body import Body, BodyKind, Film, Outcome
-from havln_mj.sim.crowd import NO_PROXIMITY, Crowd, knots_proximity
+from havln_mj.sim.crowd import NO_PROXIMITY, Crowd, knots_proximity, sample_knots
 from havln_mj.sim.frame import View
 from havln_mj.sim.images import ImageFormat
 from havln_mj.sim.navigation import NavTable
@@ -84,6 +84,7 @@ class Batch:
         self.timers = timers
         self.elements: list[Element] = []
         self.film: tuple[float, FilmCallback, tuple[str, ...]] | None = None
+        self.reactions = None  # how people react to the agent (None: they do not)
 
     def view(self, heading: float, elevation: float) -> tuple[float, float, int]:
         """Heading, elevation and view index under the view rules."""
@@ -92,10 +93,21 @@ class Batch:
         return continuous_view(heading, elevation, self.cfg.elevation_limits)
 
     def start(self, starts: Sequence[tuple[NavTable, Crowd, str, float, float]]) -> None:
-        """New episodes: ``(table, crowd, viewpoint, heading, elevation)`` per element."""
+        """New episodes: ``(table, crowd, viewpoint, heading, elevation)`` per element.
+
+        With :attr:`reactions` on, each element's people are its own: they react to that
+        element's body alone.
+        """
         elements = []
         for table, crowd, _, h, e in starts:
+            reacting = self.reactions is not None and len(crowd) > 0
+            if reacting:
+                from havln_mj.humans.reactions import ReactiveCrowd  # only when people react
+
+                crowd = ReactiveCrowd(crowd, self.reactions)
             el = Element(table, crowd, self.kind.body(table.scan_id, table.graph, crowd))
+            if reacting:
+                el.body.observe = _observer(crowd)
             el.heading, el.elevation, _ = self.view(h, e)
             elements.append(el)
         self.elements = elements
@@ -192,3 +204,13 @@ class Batch:
         self.timers["render"] += time.perf_counter() - t0
         self.timers["frames"] += 1
         return images
+
+
+def _observer(crowd) -> Callable:
+    """Tells a reactive crowd where the body went, sampled as the collision signal is."""
+
+    def observe(knots) -> None:
+        times, positions = sample_knots(np.asarray(knots, float).reshape(-1, 4))
+        crowd.observe_agent(times, positions[:, :2])
+
+    return observe

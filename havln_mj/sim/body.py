@@ -36,6 +36,13 @@ this height of the viewpoint's floor, stands at that viewpoint."""
 Knots = Sequence[Sequence[float]] | np.ndarray
 """A body's track over an action: rows ``(t, x, y, z)`` of its base, linear in between."""
 
+Observe = Callable[[Knots], None]
+"""Tells the people (those who react) where the body went: its knots over an action."""
+
+
+def ignore(knots: Knots) -> None:
+    """An :data:`Observe` for people who do not react."""
+
 
 class Film:
     """Frames to draw during actions, at ``fps`` frames per simulated second.
@@ -104,6 +111,10 @@ class Body(Protocol):
 
     viewpoint: str
     """The viewpoint the body stands at."""
+
+    observe: Observe
+    """Called with the body's knots as soon as they are known: before the frames of a
+    kinematic move are drawn, after a physical one (people who react see them)."""
 
     def start(self, viewpoint: str, heading: float, elevation: float, t: float) -> Outcome:
         """Places the body at ``viewpoint`` facing ``heading`` at time ``t`` (an instant)."""

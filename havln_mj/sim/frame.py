@@ -8,8 +8,9 @@ each call to :meth:`Frames.render` poses the people of that world at ``t`` in th
 renders colour, depth and the human mask from a named camera. The caller has written the
 agent's own pose into ``data`` (a mocap rig, or a robot's physics state).
 
-Skinned meshes live in the model, not the data, so their vertices are rewritten for ``t`` and
-re-sent to the rendering camera's GL context before each frame.
+People are drawn as :mod:`havln_mj.humans.drawing` builds them (dressed rigid pieces,
+skinned bodies or capsules). Skinned meshes live in the model, not the data, so their vertices
+are rewritten for ``t`` and re-sent to the rendering camera's GL context before each frame.
 """
 
 from __future__ import annotations
@@ -21,8 +22,7 @@ import mujoco
 import numpy as np
 
 from havln_mj import groups
-from havln_mj.humans.mujoco_people import PeopleWriter
-from havln_mj.humans.skinned import SkinWriter
+from havln_mj.humans.drawing import PeopleDrawing
 from havln_mj.render.camera import Camera
 from havln_mj.sim.crowd import Crowd
 
@@ -67,17 +67,16 @@ class Frames:
     """Renders one compiled world: people at time t, seen from any of its cameras.
 
     Args:
-        model: The compiled world (people added with
-            :func:`havln_mj.humans.mujoco_people.add_people`).
+        model: The compiled world (people added in ``style``, as
+            :class:`~havln_mj.humans.drawing.PeopleDrawing` adds them).
         crowd: The people in it, in the order they were added.
+        style: How they were drawn (:data:`~havln_mj.humans.mujoco_people.DRAW_STYLES`).
     """
 
-    def __init__(self, model: mujoco.MjModel, crowd: Crowd) -> None:
+    def __init__(self, model: mujoco.MjModel, crowd: Crowd, style: str = "pieces") -> None:
         self.model = model
         self.crowd = crowd
-        self._people = PeopleWriter(model, len(crowd.shapes))
-        skinned = [k for k, s in enumerate(crowd.skins) if s is not None]
-        self._skins = SkinWriter(model, skinned) if skinned else None
+        self._poser = PeopleDrawing(crowd, style).poser(model)
         self._human_geoms = model.geom_group == groups.HUMANS
         self._cameras: dict[str, tuple[Camera, ViewSettings]] = {}
         self._base_quat: dict[int, np.ndarray] = {}
@@ -87,11 +86,7 @@ class Frames:
 
         Kinematics is left to the caller (:meth:`render` runs it).
         """
-        if self._people.n_people:
-            self._people.write(data, *self.crowd.pose(t))
-        if self._skins is None:
-            return []
-        return list(self._skins.write(self.model, data, self.crowd.skin_vertices(t)))
+        return list(self._poser.pose(data, t))
 
     def pose(self, data: mujoco.MjData, t: float, camera: str, pitch: float = 0.0) -> list[int]:
         """Poses the people at ``t`` and ``camera`` at ``pitch``, then runs kinematics.

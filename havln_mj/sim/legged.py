@@ -28,6 +28,7 @@ GO1, compiled once; each batch element is a :class:`LeggedAgent` with its own ``
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass
@@ -116,7 +117,13 @@ class LeggedWorld:
         if collision == "none":
             collision = "auto"  # a legged robot needs floors to stand on
         spec, self.collision, _ = world_spec(scan, _with_collision(world_options, collision))
-        add_people(spec, crowd.shapes, crowd.skins, solid=options.physical_humans)
+        add_people(
+            spec,
+            crowd.shapes,
+            crowd.skins,
+            solid=options.physical_humans,
+            style=world_options.people_style,
+        )
         start = scan.graph.nodes[0]
         x, y, _ = scan.graph.position(start)
         self.handles = add_go1(
@@ -199,14 +206,7 @@ def _add_chase_camera(spec: mujoco.MjSpec, trunk: str) -> None:
 
 
 def _with_collision(options: WorldOptions, collision: str) -> WorldOptions:
-    return WorldOptions(
-        collision=collision,
-        coacd=options.coacd,
-        collision_band=options.collision_band,
-        collision_chunk=options.collision_chunk,
-        offscreen=options.offscreen,
-        vfov_deg=options.vfov_deg,
-    )
+    return dataclasses.replace(options, collision=collision)
 
 
 class LeggedAgent:

@@ -21,7 +21,14 @@ from havln_mj.errors import InvalidActionError
 from havln_mj.frames import wrap_angle
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.scan import Scan
-from havln_mj.sim.body import ROBOT_ACTIONS, Film, Outcome, nearest_viewpoint, stands_at
+from havln_mj.sim.body import (
+    ROBOT_ACTIONS,
+    Film,
+    Outcome,
+    ignore,
+    nearest_viewpoint,
+    stands_at,
+)
 from havln_mj.sim.crowd import Crowd
 from havln_mj.sim.frame import Frames, View, ViewSettings
 from havln_mj.sim.legged import LeggedAgent, LeggedOptions, LeggedWorld, WalkResult
@@ -54,7 +61,8 @@ class LeggedKind:
         entry = self._worlds.get(scan_id)
         if entry is None:
             world = LeggedWorld(self._scan(scan_id), self._world_options, crowd, self.options)
-            entry = self._worlds[scan_id] = (world, Frames(world.model, crowd))
+            frames = Frames(world.model, crowd, self._world_options.people_style)
+            entry = self._worlds[scan_id] = (world, frames)
         return entry
 
     def prepare(self, scan_id: str, crowd: Crowd, rendering: bool) -> None:
@@ -79,6 +87,7 @@ class LeggedBody:
     def __init__(self, agent: LeggedAgent, frames: Frames, graph: NavGraph) -> None:
         self.agent, self.frames, self.graph = agent, frames, graph
         self.viewpoint = ""
+        self.observe = ignore
 
     def _floor(self) -> float:
         """Height of the floor under the trunk, from the trunk's standing height."""
@@ -86,6 +95,7 @@ class LeggedBody:
 
     def _outcome(self, walk: WalkResult, viewpoint: str, arrived: bool) -> Outcome:
         self.viewpoint = viewpoint
+        self.observe(walk.track)
         return Outcome(
             walk.duration,
             walk.track,

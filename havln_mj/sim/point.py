@@ -22,19 +22,22 @@ from havln_mj.frames import wrap_angle
 from havln_mj.robot.point_body import CAMERA, PointBody
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.scan import Scan
-from havln_mj.sim.body import Film, Outcome
+from havln_mj.sim.body import Film, Outcome, ignore
 from havln_mj.sim.crowd import Crowd
 from havln_mj.sim.frame import Frames, View, ViewSettings
 from havln_mj.sim.world import WorldOptions, build_world
 
 
-class _Stage:
-    """A scan's rendering world: the building, its people and the rig, with its frames."""
+class Stage:
+    """A scan's rendering world: the building, its people and the point rig, with its frames.
+
+    For views from any camera pose: the point body's, and tools that look around a scan.
+    """
 
     def __init__(self, scan: Scan, options: WorldOptions, crowd: Crowd) -> None:
         self.world = build_world(scan, options, crowd.shapes, crowd.skins)
         self.data = mujoco.MjData(self.world.model)
-        self.frames = Frames(self.world.model, crowd)
+        self.frames = Frames(self.world.model, crowd, options.people_style)
         self.rig = PointBody(np.zeros(3))
 
     def place(self, pose: tuple) -> None:
@@ -43,9 +46,16 @@ class _Stage:
         self.rig.set_pose(position, heading, elevation)
         self.rig.write(self.world.model, self.data)
 
-    def render(self, pose: tuple, settings: ViewSettings, t: float, camera: str | None) -> View:
+    def render(
+        self, pose: tuple, settings: ViewSettings, t: float, camera: str | None = None
+    ) -> View:
+        """The view from the rig at ``pose`` (or from ``camera``) at simulated time ``t``."""
         self.place(pose)
         return self.frames.render(self.data, t, camera or CAMERA, settings)
+
+    def close(self) -> None:
+        """Releases the cameras' GL resources."""
+        self.frames.close()
 
 
 class PointKind:
@@ -74,7 +84,7 @@ class PointKind:
         self._options = world_options
         self._cache_size = max(1, cache_size)
         self.speed, self.turn_rate = speed, turn_rate
-        self._stages: OrderedDict[str, _Stage] = OrderedDict()
+        self._stages: OrderedDict[str, Stage] = OrderedDict()
 
     def body(self, scan_id: str, graph: NavGraph, crowd: Crowd) -> GraphPointBody:
         """A new point body on ``scan_id``."""
@@ -85,14 +95,14 @@ class PointKind:
         if rendering:
             self.stage(scan_id, crowd)
 
-    def stage(self, scan_id: str, crowd: Crowd) -> _Stage:
+    def stage(self, scan_id: str, crowd: Crowd) -> Stage:
         """The rendering world of ``scan_id`` (built on first use, least recently used out)."""
         stage = self._stages.get(scan_id)
         if stage is None:
-            stage = self._stages[scan_id] = _Stage(self._scan(scan_id), self._options, crowd)
+            stage = self._stages[scan_id] = Stage(self._scan(scan_id), self._options, crowd)
             while len(self._stages) > self._cache_size:
                 _, old = self._stages.popitem(last=False)
-                old.frames.close()
+                old.close()
         else:
             self._stages.move_to_end(scan_id)
         return stage
@@ -100,7 +110,7 @@ class PointKind:
     def close(self) -> None:
         """Releases every world's renderer."""
         for stage in self._stages.values():
-            stage.frames.close()
+            stage.close()
         self._stages.clear()
 
 
@@ -114,6 +124,7 @@ class GraphPointBody:
         "elevation",
         "graph",
         "heading",
+        "observe",
         "scan_id",
         "viewpoint",
         "xyz",
@@ -126,6 +137,7 @@ class GraphPointBody:
         self.xyz = (0.0, 0.0, 0.0)
         self.heading = self.elevation = 0.0
         self._drawn: tuple | None = None
+        self.observe = ignore
 
     def start(self, viewpoint: str, heading: float, elevation: float, t: float) -> Outcome:
         """Places the rig at ``viewpoint`` (an instant)."""
@@ -133,7 +145,9 @@ class GraphPointBody:
         self.xyz = tuple(float(c) for c in self.graph.position(viewpoint))
         self.heading, self.elevation = heading, elevation
         self._drawn = None
-        return Outcome(0.0, ((t, *self.xyz),), viewpoint, heading)
+        knots = ((t, *self.xyz),)
+        self.observe(knots)
+        return Outcome(0.0, knots, viewpoint, heading)
 
     def move(
         self,
@@ -157,6 +171,7 @@ class GraphPointBody:
             knots.append((t + move_s, *there))
         if duration > move_s:
             knots.append((t + duration, *there))
+        self.observe(knots)  # people react to the move they see coming, frames included
         if film is not None:
             self._film(film, t, move_s, duration, here, there, heading, elevation)
         self.viewpoint, self.xyz = target, there

@@ -103,6 +103,8 @@ class Simulator(SimulatorSettings):
         collision_distance: float = COLLISION_DISTANCE,
         body: str = "point",
         legged: object | None = None,
+        together: float = 0.0,
+        reactions: bool | object = False,
     ) -> None:
         """Creates an uninitialised simulator with MatterSim's default settings.
 
@@ -119,6 +121,12 @@ class Simulator(SimulatorSettings):
             body: ``"point"`` (kinematic camera rig) or ``"go1"`` (the simulated quadruped).
             legged: How the GO1 is set up and driven
                 (:class:`~havln_mj.sim.legged.LeggedOptions`; default its defaults).
+            together: With ``humans=True``: the chance that a placed person is joined by
+                others (conversations, a handover, walking side by side); 0 keeps HA3D's
+                one person per spot.
+            reactions: Whether people notice the agent (walkers yield, others glance), or
+                a :class:`~havln_mj.humans.reactions.Reactions` saying how; each batch
+                element's people react to that element alone.
         """
         super().__init__()
         for name, value in (
@@ -132,6 +140,10 @@ class Simulator(SimulatorSettings):
             raise InvalidArgumentError(f"humans must be a bool or a crowd factory, got {humans!r}")
         if body not in BODIES:
             raise InvalidArgumentError(f"body {body!r} unknown; valid: {', '.join(BODIES)}")
+        if not (isinstance(together, numbers.Real) and 0.0 <= together <= 1.0):
+            raise InvalidArgumentError(f"together must be a chance in [0, 1], got {together!r}")
+        self._together = float(together)
+        self._reactions = _reactions(reactions)
         self._humans = humans
         self._body_name = body
         self._legged_options = legged
@@ -165,12 +177,15 @@ class Simulator(SimulatorSettings):
         image_format = ImageFormat(cfg.color_order, cfg.depth_units)
         self._batch = Batch(cfg, self._kind, image_format, self._collision_distance, self._timers)
         self._batch.film = self._film
+        self._batch.reactions = self._reactions
         self._rng = np.random.default_rng(cfg.seed)
         self._crowd_of = {}
         if self._humans is True:
             from havln_mj.sim.people import HumanCrowds  # the humans package, only when used
 
-            self._crowds = HumanCrowds(self._library.scan, *self._human_files)
+            self._crowds = HumanCrowds(
+                self._library.scan, *self._human_files, together=self._together
+            )
         else:
             self._crowds = self._humans or None
         self._initialized = True
@@ -319,6 +334,15 @@ class Simulator(SimulatorSettings):
         if not self._initialized:
             self.initialize()
         return self._library.scan(scan_id)
+
+    def people(self, element: int = 0) -> Crowd:
+        """The people element ``element`` shares its episode with (reacting to it, if set).
+
+        Raises:
+            NotInitializedError: No episode has been started.
+        """
+        self._started("people")
+        return self._batch.elements[element].crowd
 
     def crowd(self, scan_id: str) -> Crowd:
         """The people of ``scan_id`` (made on first use from the seed and the scan)."""
@@ -549,3 +573,16 @@ class Simulator(SimulatorSettings):
     get_geodesic_distance = getGeodesicDistance
     get_state = getState
     get_human_state = getHumanState
+
+
+def _reactions(value: object) -> object | None:
+    """The reactions of ``reactions=`` (None when people do not react)."""
+    if value is False:
+        return None
+    from havln_mj.humans.reactions import Reactions  # the humans package, only when used
+
+    if value is True:
+        return Reactions()
+    if isinstance(value, Reactions):
+        return value if value.enabled else None
+    raise InvalidArgumentError(f"reactions takes a bool or a Reactions, got {value!r}")

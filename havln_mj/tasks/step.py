@@ -30,7 +30,7 @@ from typing import Union
 from havln_mj.errors import InvalidArgumentError, NotInitializedError
 from havln_mj.sim.egocentric import EgoAction
 from havln_mj.sim.state import SimState
-from havln_mj.tasks.datasets import Episode
+from havln_mj.tasks.episodes import Episode
 from havln_mj.tasks.rewards import SUCCESS_DISTANCE, RewardFn, StepOutcome, get_reward
 
 GraphAction = tuple[int, float, float]
