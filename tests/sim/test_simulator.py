@@ -321,7 +321,7 @@ def test_rendering_off_does_no_gl_work(monkeypatch):
     def fail(*args, **kwargs):
         raise AssertionError("a world was built with rendering off")
 
-    monkeypatch.setattr(point, "_Stage", fail)
+    monkeypatch.setattr(point, "Stage", fail)
     sim = _sim()
     sim.newRandomEpisode([SCAN])
     sim.makeAction([0], [0.3], [0.0])
