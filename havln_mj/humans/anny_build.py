@@ -64,7 +64,7 @@ PHENOTYPES = (
     ("woman-elder-slim", 1.0, 0.97, 0.3, 0.3, 1.62, 0.5),
     ("woman-elder-heavy", 1.0, 0.93, 0.4, 0.8, 1.55, 0.5),
 )
-"""The catalog's phenotypes: ``(id, gender 0 = male … 1 = female, age (0 baby, 1/3 child,
+"""The catalog's phenotypes, each ``(id, gender 0 = male … 1 = female, age (0 baby, 1/3 child,
 2/3 young adult, 1 old), muscle, weight, standing height in metres (Anny's height parameter is
 solved for it), proportions)``; Anny's parameters lie in [0, 1]."""
 PHENOTYPE_LABELS = ("gender", "age", "muscle", "weight", "height", "proportions")

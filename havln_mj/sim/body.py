@@ -257,4 +257,4 @@ def make_kind(
 
 
 BODY_KINDS = ("point", "go1")
-"""The bodies a simulator can have: MatterSim's point camera rig, or the simulated GO1."""
+"""The bodies a simulator can have (MatterSim's point camera rig, or the simulated GO1)."""

@@ -105,7 +105,7 @@ REWARDS: dict[str, RewardFn] = {
     "strategy_5": strategy_5,
     "strategy_6": strategy_6,
 }
-"""The reward functions by name: the paper's terms and HA3D's six strategies."""
+"""The reward functions by name (the paper's terms and HA3D's six strategies)."""
 
 
 def step_reward(fn: RewardFn, outcome: StepOutcome) -> float:
