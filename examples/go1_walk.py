@@ -47,16 +47,19 @@ def main() -> None:
     graph, start = sim.graph(args.scene), state.location.viewpointId
     paths = [graph.shortest_path(start, vp) for vp in graph.nodes]
     path = max((p for p in paths if len(p) <= args.edges + 1), key=len)
-    for target in path[1:]:
-        ids = [loc.viewpointId for loc in state.navigableLocations]
-        sim.makeAction([ids.index(target)], [0.0], [0.0])
+    robot = ("turn_left", "forward", "forward")
+    moves = [(f"to {vp[:8]}", vp) for vp in path[1:]] + [(name, None) for name in robot]
+    for move, target in moves:
+        if target:  # a graph move to a navigable viewpoint
+            ids = [loc.viewpointId for loc in state.navigableLocations]
+            sim.makeAction([ids.index(target)], [0.0], [0.0])
+        else:  # one of the real robot's own actions
+            sim.makeRobotAction([move])
         state = sim.getState()[0]
-        report(f"to {target[:8]}", state)
+        report(move, state)
         if state.fell or state.diverged:
+            print("the GO1 is down: its episode is over")
             break
-    for action in ("turn_left", "forward", "forward"):
-        sim.makeRobotAction([action])
-        report(action, sim.getState()[0])
     print(f"geodesic distance back to the start: {sim.getGeodesicDistance([start])[0]:.2f} m")
     sim.close()
 
