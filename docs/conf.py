@@ -1,6 +1,6 @@
 """Sphinx configuration of the havln_mj documentation.
 
-Build it with ``sphinx-build -W --keep-going -n -b html docs docs/_build`` (the ``docs`` extra).
+Build it with ``sphinx-build -W --keep-going -n -b html docs build/docs`` (the ``docs`` extra).
 The reference is read from the package's Google-style docstrings (autodoc + napoleon); the
 guides are Markdown (MyST). Nothing is fetched from the network: no intersphinx inventories,
 and the theme ships its own assets.
