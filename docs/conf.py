@@ -13,7 +13,6 @@ import pkgutil
 import sys
 import typing
 
-from docutils.parsers.rst import directives
 from docutils.statemachine import StringList
 from sphinx.util import logging
 from sphinx.util.docutils import SphinxDirective
@@ -83,12 +82,10 @@ class HavlnModules(SphinxDirective):
 
     required_arguments = 1
     final_argument_whitespace = True
-    option_spec: typing.ClassVar = {"exclude": directives.unchanged}
 
     def run(self) -> list:
         """The sections of the named modules."""
         modules = _public_modules()
-        exclude = set((self.options.get("exclude") or "").split())
         chosen: list[str] = []
         for pattern in self.arguments[0].split():
             if pattern.endswith(".*"):
@@ -98,7 +95,7 @@ class HavlnModules(SphinxDirective):
                 found = [m for m in modules if m == pattern]
             if not found:
                 _log.warning("havln-modules: no module %s", pattern, location=self.get_location())
-            chosen += [m for m in found if m not in chosen and m not in exclude]
+            chosen += [m for m in found if m not in chosen]
         claimed = self.env.domaindata.setdefault("havln_modules", {})
         content = StringList()
         for name in chosen:
@@ -120,7 +117,9 @@ def _check_coverage(app, env) -> None:
     for name in _public_modules():
         pages = claimed.get(name, [])
         if not pages:
-            _log.warning("module %s is on no page of docs/api/", name)
+            _log.warning(
+                "module %s is on no page: name it in a havln-modules line of docs/api/", name
+            )
         elif len(pages) > 1:
             _log.warning("module %s is on several pages: %s", name, ", ".join(pages))
 
@@ -135,7 +134,7 @@ def _class_typehints(app, what: str, name: str, obj: object, *_: object) -> None
         return
     try:
         hints = typing.get_type_hints(obj.__init__)
-    except Exception:
+    except Exception:  # an annotation that cannot be evaluated: Sphinx's record stands
         return
     recorded = app.env.current_document.autodoc_annotations.setdefault(name, {})
     for param, hint in hints.items():
