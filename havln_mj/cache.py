@@ -25,7 +25,7 @@ def _umask() -> int:
 
 
 def pid_alive(pid: int) -> bool:
-    """Whether a process with id ``pid`` is running (this one included)."""
+    """Whether a process with id ``pid`` is running (this one included; not a zombie)."""
     if pid == os.getpid():
         return True
     try:
@@ -34,7 +34,10 @@ def pid_alive(pid: int) -> bool:
         return False
     except PermissionError:  # someone else's process
         return True
-    return True
+    try:  # a killed process not yet reaped still has an id (Linux: state Z in /proc)
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except (OSError, IndexError):
+        return True
 
 
 def remove_orphans(target: Path) -> list[Path]:
