@@ -264,7 +264,7 @@ def _check_geometry(poses: np.ndarray, heights: np.ndarray, ids: list[str], sour
         )
     raise MalformedDataError(
         f"{where}: height must be a camera height above the floor in (0, {MAX_HEIGHT_M:g}] "
-        f"m, got {heights[i]!r}"
+        f"m, got {float(heights[i])!r}"
     )
 
 

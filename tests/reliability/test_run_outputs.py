@@ -93,6 +93,7 @@ def test_an_interrupted_rerun_leaves_the_earlier_run_whole(earlier_run, tmp_path
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
 
 
+@pytest.mark.slow
 def test_a_killed_runs_staging_is_cleaned_by_the_next_run(earlier_run, tmp_path):
     out = tmp_path / "out"
     _copy(earlier_run, out)
