@@ -15,7 +15,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 from tqdm import tqdm
@@ -60,6 +60,19 @@ def _summary(row: dict) -> str:
     )
 
 
+def _report(scene: str, future: Future) -> int:
+    """Writes a built scene's line; returns 1 if it failed."""
+    try:
+        tqdm.write(_summary(future.result()))
+    except HavlnError as exc:
+        tqdm.write(f"{scene}: FAILED: {exc}")
+    except Exception as exc:  # a crash in one scene must not lose the others
+        tqdm.write(f"{scene}: FAILED unexpectedly ({type(exc).__name__}: {exc})")
+    else:
+        return 0
+    return 1
+
+
 def scenes_build(args: argparse.Namespace) -> int:
     """Builds the scenes in parallel with a progress bar; prints one line per scene.
 
@@ -78,18 +91,14 @@ def scenes_build(args: argparse.Namespace) -> int:
             pool.submit(build_scene, s, args.mp3d_dir, args.connectivity_dir, args.collision): s
             for s in ids
         }
-        with tqdm(total=len(ids), desc="scenes", unit="scene") as bar:
-            for future in as_completed(futures):
-                scene = futures[future]
-                try:
-                    tqdm.write(_summary(future.result()))
-                except HavlnError as exc:
-                    failures += 1
-                    tqdm.write(f"{scene}: FAILED: {exc}")
-                except Exception as exc:  # a crash in one scene must not lose the others
-                    failures += 1
-                    tqdm.write(f"{scene}: FAILED unexpectedly ({type(exc).__name__}: {exc})")
-                bar.update()
+        try:
+            with tqdm(total=len(ids), desc="scenes", unit="scene") as bar:
+                for future in as_completed(futures):
+                    failures += _report(futures[future], future)
+                    bar.update()
+        except KeyboardInterrupt:
+            pool.shutdown(wait=True, cancel_futures=True)  # scenes not started stay unbuilt
+            raise
     print(f"built {len(ids) - failures} of {len(ids)} scenes")
     return 1 if failures else 0
 
@@ -192,6 +201,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except HavlnError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("interrupted: finished scenes are kept, unfinished ones left out", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -1,4 +1,9 @@
-"""Loading scans: one loader for every scan folder, and the cache of built procedural houses."""
+"""Loading scans: one loader for every scan folder, and the cache of built scans.
+
+A built scan (procedural house, converted Matterport scan, graph proxy) is used from the cache
+only when it is whole and was built from the inputs the scene would be built from now
+(:mod:`havln_mj.scene.cache_keys`); otherwise it is rebuilt, with a warning when it was damaged.
+"""
 
 from __future__ import annotations
 

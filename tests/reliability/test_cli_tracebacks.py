@@ -9,6 +9,10 @@ from __future__ import annotations
 import json
 import os
 import re
+import signal
+import subprocess
+import sys
+import time
 
 import pytest
 
@@ -140,3 +144,21 @@ def test_train_refuses_a_bad_setting_without_a_traceback(cli, args, message):
     proc = cli([*TRAIN, *args], timeout=120)
     assert "Traceback" not in proc.stderr
     assert proc.returncode == 2 and message in proc.stderr
+
+
+def test_an_interrupted_scenes_build_exits_130_and_leaves_no_staging(fresh_cache):
+    scans = fresh_cache / "scans"
+    cmd = [sys.executable, "-m", "havln_mj.cli", "scenes", "build", "proc-11", "proc-12"]
+    # A terminal's Ctrl-C reaches the whole process group: the workers too.
+    proc = subprocess.Popen(
+        cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
+    )
+    deadline = time.monotonic() + 120
+    while not (scans.is_dir() and any(scans.iterdir())):
+        assert proc.poll() is None and time.monotonic() < deadline
+        time.sleep(0.01)
+    os.killpg(proc.pid, signal.SIGINT)
+    _, stderr = proc.communicate(timeout=120)
+    assert "Traceback" not in stderr, stderr[-3000:]
+    assert proc.returncode == 130 and "interrupted" in stderr
+    assert not [p for p in scans.iterdir() if p.name.startswith(".")]
