@@ -92,9 +92,10 @@ class _InlinePool:
         return future
 
 
-def test_scenes_build_starts_no_more_workers_than_scenes_and_cpus(monkeypatch, capsys):
-    row = {
-        "scene": "proc-0",
+def _built(scene: str, *args) -> dict:
+    """The summary row of a scene build that did nothing."""
+    return {
+        "scene": scene,
         "kind": "procedural",
         "viewpoints": 1,
         "collision": "boxes",
@@ -104,11 +105,14 @@ def test_scenes_build_starts_no_more_workers_than_scenes_and_cpus(monkeypatch, c
         "unwalkable_edges": None,
         "seconds": 0.0,
     }
+
+
+def test_scenes_build_starts_no_more_workers_than_scenes_and_cpus(monkeypatch, capsys):
     asked: list[int] = []
     monkeypatch.setattr(
         cli, "ProcessPoolExecutor", lambda max_workers: _InlinePool(max_workers, asked)
     )
-    monkeypatch.setattr(cli, "build_scene", lambda *args: row)
+    monkeypatch.setattr(cli, "build_scene", _built)
     assert cli.main(["scenes", "build", "proc-0", "--workers", "100000"]) == 0
     assert asked == [1]
     assert "using 1 worker process, not 100000" in capsys.readouterr().err
@@ -118,17 +122,7 @@ def test_a_crash_in_one_scene_does_not_end_the_batch(monkeypatch, capsys):
     def build(scene, *args):
         if scene == "proc-1":
             raise ZeroDivisionError("a bug")
-        return {
-            "scene": scene,
-            "kind": "procedural",
-            "viewpoints": 1,
-            "collision": "boxes",
-            "collision_geoms": 1,
-            "edges_by_route": 0,
-            "edges_by_flight": None,
-            "unwalkable_edges": None,
-            "seconds": 0.0,
-        }
+        return _built(scene)
 
     monkeypatch.setattr(
         cli, "ProcessPoolExecutor", lambda max_workers: _InlinePool(max_workers, [])

@@ -25,14 +25,19 @@ def _staging(out: Path) -> list[Path]:
 def earlier_run(tmp_path_factory) -> Path:
     """A finished run's folder, as a template for each test to copy."""
     out = tmp_path_factory.mktemp("runs") / "earlier"
+    _run_once(out)
+    return out
+
+
+def _run_once(out: Path, *extra: str) -> None:
+    """A one-episode run into ``out`` that must finish."""
     proc = subprocess.run(
-        [sys.executable, "-m", *RUN, "--episodes", "1", "--out", str(out)],
+        [sys.executable, "-m", *RUN, "--episodes", "1", "--out", str(out), *extra],
         capture_output=True,
         text=True,
         timeout=600,
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
-    return out
 
 
 def _copy(folder: Path, to: Path) -> dict[str, bytes]:
@@ -65,13 +70,7 @@ def test_a_finished_run_lists_only_its_own_files(earlier_run, tmp_path):
     out = tmp_path / "out"
     _copy(earlier_run, out)
     (out / "go1.mp4").write_bytes(b"an earlier --robot go1 run's video")
-    proc = subprocess.run(
-        [sys.executable, "-m", *RUN, "--episodes", "1", "--seed", "3", "--out", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    assert proc.returncode == 0, proc.stderr[-2000:]
+    _run_once(out, "--seed", "3")
     summary = json.loads((out / "summary.json").read_text())
     assert summary["seed"] == 3
     assert not (out / "go1.mp4").exists()
@@ -102,11 +101,5 @@ def test_a_killed_runs_staging_is_cleaned_by_the_next_run(earlier_run, tmp_path)
     os.kill(proc.pid, signal.SIGKILL)
     proc.communicate(timeout=60)
     assert _staging(out)
-    proc = subprocess.run(
-        [sys.executable, "-m", *RUN, "--episodes", "1", "--out", str(out)],
-        capture_output=True,
-        text=True,
-        timeout=600,
-    )
-    assert proc.returncode == 0, proc.stderr[-2000:]
+    _run_once(out)
     assert not _staging(out)
