@@ -24,6 +24,7 @@ from havln_mj.errors import InvalidArgumentError, MissingDataError
 log = logging.getLogger(__name__)
 
 _ASSET_DIRS = ("assets", "scenes", "humans", "robots", "agents", "eval")
+CACHE_ENV = "HAVLN_CACHE"
 
 
 def project_home() -> Path:
@@ -66,9 +67,6 @@ def asset_path(kind: str, *parts: str) -> Path:
     if not path.exists():
         raise MissingDataError(f"asset not found: {path}")
     return path
-
-
-CACHE_ENV = "HAVLN_CACHE"
 
 
 def cache_root() -> Path:

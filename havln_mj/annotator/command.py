@@ -53,7 +53,7 @@ def annotate(args: argparse.Namespace) -> int:
         argchecks.existing("--mp3d-dir", args.mp3d_dir),
         argchecks.existing("--connectivity-dir", args.connectivity_dir),
         None if not path.is_dir() else f"--placements {path} is a folder; give a JSON file",
-        argchecks.writable_folder("--placements' folder", path.parent),
+        argchecks.writable_folder("the folder of --placements", path.parent),
     ]
     problems = [p for p in problems if p]
     if problems:
