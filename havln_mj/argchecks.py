@@ -38,13 +38,17 @@ def existing(flag: str, path: Path | None, kind: str = "folder") -> str | None:
 
 
 def writable_folder(flag: str, path: Path) -> str | None:
-    """Whether ``path`` is, or can be made, a folder this process can write (it is created)."""
-    path = Path(path).expanduser()
+    """Whether ``path`` is a folder this process can write, or can be made one (not made here)."""
+    path = Path(path).expanduser().absolute()
     if path.exists() and not path.is_dir():
         return f"{flag} {path} is a file; give a folder to write into"
+    base = path
+    while not base.exists():
+        base = base.parent
+    if not base.is_dir():
+        return f"{flag} {path} cannot be made: {base} is a file"
     try:
-        path.mkdir(parents=True, exist_ok=True)
-        fd, probe = tempfile.mkstemp(dir=path, prefix=".write-test-")
+        fd, probe = tempfile.mkstemp(dir=base, prefix=".write-test-")
         os.close(fd)
         os.unlink(probe)
     except OSError as exc:
