@@ -548,7 +548,7 @@ class Simulator(SimulatorSettings):
 
     def resetTimers(self) -> None:  # noqa: N802
         """Zeroes the timers ``timingInfo`` reports."""
-        self._timers = {"process": 0.0, "render": 0.0, "frames": 0}
+        self._timers.update(process=0.0, render=0.0, frames=0)  # the batch shares the dict
 
     def timing(self) -> dict[str, float]:
         """Seconds in simulator calls and in rendering, and frames rendered, since the reset."""
