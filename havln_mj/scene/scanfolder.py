@@ -8,4 +8,4 @@ BOXES = "boxes.json"  # optional exact box geometry (procedural houses, graph pr
 ROUTES = "routes.json"  # optional: edges walked by a route, not straight (graph proxies)
 META = "scan.json"  # scene id, kind, provenance
 MANIFEST = "manifest.json"
-"""The manifest of a cached scan: its inputs and files (:mod:`havln_mj.scene.cache_keys`)."""
+"""A cached scan's manifest of its inputs and files (see :mod:`~havln_mj.scene.cache_keys`)."""
