@@ -10,7 +10,9 @@ Matterport3DSimulator's ``MatterSim.Simulator``). On top of MatterSim:
   an optional human mask. ``state.isCrushed`` is 1 when the agent came within the collision
   distance of a person at any time during the last action (for the start state: at the
   start), in every mode (HA3D computed it only with rendering off); ``getHumanState()``
-  gives everyone's state.
+  gives everyone's state. ``collision_rule="ha3d"`` and ``human_clock="ha3d"`` measure it
+  as HA3D's code did instead (only in each state, 3-D from the camera, people on one shared
+  frame counter; see :mod:`havln_mj.sim.rules`).
 * **Clock**: every action advances the element's simulated time (``state.time``) by its
   duration: the move at ``speed`` m/s, then the turn at ``turn_rate`` rad/s (the larger of
   the heading and elevation change); an action that neither moves nor turns is a wait of
@@ -62,10 +64,11 @@ from havln_mj.sim.actions import (
 )
 from havln_mj.sim.batch import WAIT_S, Batch, Element, FilmCallback
 from havln_mj.sim.body import BODY_KINDS, ROBOT_ACTIONS, BodyKind, make_kind
-from havln_mj.sim.crowd import COLLISION_DISTANCE, NO_CROWD, Crowd
+from havln_mj.sim.crowd import COLLISION_DISTANCE, NO_CROWD, Crowd, ha3d_points
 from havln_mj.sim.egocentric import DEFAULT_TURN, EgoAction, ego_to_mattersim, parse_ego_action
 from havln_mj.sim.images import ImageFormat
 from havln_mj.sim.navigation import NavTable
+from havln_mj.sim.rules import CollisionRule, HumanClock
 from havln_mj.sim.scenes import SceneLibrary
 from havln_mj.sim.settings import SimulatorSettings, _check_angle
 from havln_mj.sim.state import SimState
@@ -105,6 +108,8 @@ class Simulator(SimulatorSettings):
         legged: object | None = None,
         together: float = 0.0,
         reactions: bool | object = False,
+        collision_rule: str | CollisionRule = "strict",
+        human_clock: str | HumanClock = "continuous",
     ) -> None:
         """Creates an uninitialised simulator with MatterSim's default settings.
 
@@ -127,6 +132,12 @@ class Simulator(SimulatorSettings):
             reactions: Whether people notice the agent (walkers yield, others glance), or
                 a :class:`~havln_mj.humans.reactions.Reactions` saying how; each batch
                 element's people react to that element alone.
+            collision_rule: ``"strict"`` (along every action, horizontally; the default),
+                ``"ha3d"`` (in each state, 3-D from the camera) or a
+                :class:`~havln_mj.sim.rules.CollisionRule`; a name uses
+                ``collision_distance`` as the threshold.
+            human_clock: ``"continuous"`` (each element's simulated time), ``"ha3d"``
+                (HA3D's shared frame counter) or a :class:`~havln_mj.sim.rules.HumanClock`.
         """
         super().__init__()
         for name, value in (
@@ -155,6 +166,10 @@ class Simulator(SimulatorSettings):
         self._library: SceneLibrary | None = None
         self._kind: BodyKind | None = None
         self._batch: Batch | None = None
+        self._rule = CollisionRule.strict(self._collision_distance)
+        self._clock = HumanClock.continuous()
+        self.set_collision_rule(collision_rule)
+        self.set_human_clock(human_clock)
         self._rng = np.random.default_rng(self._cfg.seed)
         self._crowd_of: dict[str, Crowd] = {}
         self._film: tuple[float, FilmCallback, tuple[str, ...]] | None = None
@@ -175,7 +190,8 @@ class Simulator(SimulatorSettings):
             self._legged_options,
         )
         image_format = ImageFormat(cfg.color_order, cfg.depth_units)
-        self._batch = Batch(cfg, self._kind, image_format, self._collision_distance, self._timers)
+        self._batch = Batch(cfg, self._kind, image_format, self._rule, self._timers)
+        self._batch.clock = self._clock
         self._batch.film = self._film
         self._batch.reactions = self._reactions
         self._rng = np.random.default_rng(cfg.seed)
@@ -238,6 +254,50 @@ class Simulator(SimulatorSettings):
         self._film = (float(fps), callback, tuple(cameras))
         if self._batch is not None:
             self._batch.film = self._film
+
+    def set_collision_rule(self, rule: str | CollisionRule) -> None:
+        """When and how collisions are measured, from the next state on.
+
+        Args:
+            rule: ``"strict"``, ``"ha3d"`` (both with the simulator's ``collision_distance``)
+                or a :class:`~havln_mj.sim.rules.CollisionRule`.
+
+        Raises:
+            InvalidArgumentError: An unknown rule, or one the human clock cannot go with
+                (HA3D's clock poses people only in states: the check must be per state).
+        """
+        rule = _collision_rule(rule, self._collision_distance)
+        _check_pair(rule, self._clock, self._reactions)
+        self._rule = rule
+        if self._batch is not None:
+            self._batch.rule = rule
+
+    def set_human_clock(self, clock: str | HumanClock) -> None:
+        """Which time people are posed at, from the next action on.
+
+        Args:
+            clock: ``"continuous"``, ``"ha3d"`` or a :class:`~havln_mj.sim.rules.HumanClock`.
+                Choosing HA3D's clock restarts its counter at frame 0.
+
+        Raises:
+            InvalidArgumentError: An unknown clock; HA3D's clock with a per-action collision
+                check or with people who react (HA3D's people do not).
+        """
+        clock = _human_clock(clock)
+        _check_pair(self._rule, clock, self._reactions)
+        self._clock = clock
+        if self._batch is not None:
+            self._batch.clock, self._batch.frame = clock, 0
+
+    @property
+    def collision_rule(self) -> CollisionRule:
+        """The collision rule in use."""
+        return self._rule
+
+    @property
+    def human_clock(self) -> HumanClock:
+        """The people's clock in use."""
+        return self._clock
 
     # ------------------------------------------------------------------ episodes
 
@@ -369,7 +429,7 @@ class Simulator(SimulatorSettings):
         ):
             raise InvalidArgumentError(f"element {element!r} out of range; valid 0–{n - 1}")
         el = self._batch.elements[element]
-        return el.body.scene(el.elevation, el.time)
+        return el.body.scene(el.elevation, el.people_t)
 
     # ------------------------------------------------------------------ actions
 
@@ -522,21 +582,35 @@ class Simulator(SimulatorSettings):
         return [el.state for el in self._batch.elements]
 
     def getHumanState(self) -> list[list]:  # noqa: N802
-        """Each element's people at the element's time: a list of states per element.
+        """Each element's people as its state has them: a list of states per element.
 
-        A state (:class:`havln_mj.humans.crowd.PersonState`) has ``position`` (pelvis),
-        ``heading``, ``velocity``, ``activity``, ``text`` and ``region``.
+        People are posed at the element's time (on HA3D's clock, at the shared counter's
+        time of the element's last state). A state
+        (:class:`havln_mj.humans.crowd.PersonState`) has ``position`` (pelvis), ``heading``,
+        ``velocity``, ``activity``, ``text`` and ``region``.
         """
         self._started("getHumanState")
-        return [el.crowd.states(el.time) for el in self._batch.elements]
+        return [el.crowd.states(el.people_t) for el in self._batch.elements]
 
     def getHumanPositions(self) -> list[np.ndarray]:  # noqa: N802 - getHumanState's sibling
-        """Each element's people's pelvis positions ``(K, 3)`` at the element's time.
+        """Each element's people's pelvis positions ``(K, 3)`` as its state has them.
 
         The ``position`` of every :meth:`getHumanState` entry, without computing the rest.
         """
         self._started("getHumanPositions")
-        return [el.crowd.positions(np.array([el.time]))[0] for el in self._batch.elements]
+        return [el.crowd.positions(np.array([el.people_t]))[0] for el in self._batch.elements]
+
+    def collision_points(self) -> list[np.ndarray]:
+        """Each element's people as the collision rule measures them: ``(K, 3)`` each.
+
+        Pelvis positions (the strict rule), or HA3D's tracked points
+        (:func:`~havln_mj.sim.crowd.ha3d_points`) with ``collision_rule="ha3d"``; at the
+        time of the element's last state.
+        """
+        self._started("collision_points")
+        if self._rule.distance == "horizontal":
+            return self.getHumanPositions()
+        return [ha3d_points(el.crowd, el.people_t) for el in self._batch.elements]
 
     def _started(self, what: str) -> None:
         if self._batch is None or not self._batch.elements:
@@ -573,6 +647,42 @@ class Simulator(SimulatorSettings):
     get_geodesic_distance = getGeodesicDistance
     get_state = getState
     get_human_state = getHumanState
+
+
+def _collision_rule(value: object, threshold: float) -> CollisionRule:
+    if isinstance(value, CollisionRule):
+        return value
+    named = {"strict": CollisionRule.strict, "ha3d": CollisionRule.ha3d}
+    if isinstance(value, str) and value in named:
+        return named[value](threshold)
+    raise InvalidArgumentError(
+        f"collision_rule {value!r} unknown; valid: 'strict', 'ha3d' or a CollisionRule"
+    )
+
+
+def _human_clock(value: object) -> HumanClock:
+    if isinstance(value, HumanClock):
+        return value
+    named = {"continuous": HumanClock.continuous, "ha3d": HumanClock.ha3d}
+    if isinstance(value, str) and value in named:
+        return named[value]()
+    raise InvalidArgumentError(
+        f"human_clock {value!r} unknown; valid: 'continuous', 'ha3d' or a HumanClock"
+    )
+
+
+def _check_pair(rule: CollisionRule, clock: HumanClock, reactions: object | None) -> None:
+    """HA3D's clock poses people only in states, and its people do not react."""
+    if clock.kind == "ha3d" and rule.check != "state":
+        raise InvalidArgumentError(
+            "HA3D's human clock poses people only in states: it needs a per-state collision "
+            "check (collision_rule='ha3d'), not the continuous one"
+        )
+    if clock.kind == "ha3d" and reactions is not None:
+        raise InvalidArgumentError(
+            "HA3D's human clock needs people who do not react (reactions=False): on one "
+            "shared frame counter there is no track for them to react to"
+        )
 
 
 def _reactions(value: object) -> object | None:
