@@ -24,6 +24,7 @@ from havln_mj.sim.crowd import (
     NO_PROXIMITY,
     Crowd,
     Proximity,
+    ha3d_points,
     knots_proximity,
     sample_knots,
     state_proximity,
@@ -58,6 +59,7 @@ class Element:
         "heading",
         "navigable",
         "people_t",
+        "people_xyz",
         "state",
         "step",
         "table",
@@ -68,6 +70,7 @@ class Element:
     def __init__(self, table: NavTable, crowd: Crowd, body: Body) -> None:
         self.table, self.crowd, self.body = table, crowd, body
         self.heading = self.elevation = self.time = self.people_t = 0.0
+        self.people_xyz: np.ndarray | None = None  # pelvis positions at people_t, once asked
         self.view_index = self.step = 0
         self.navigable: list[ViewPoint] = []
         self.state: SimState | None = None
@@ -202,6 +205,7 @@ class Batch:
             el.step += 1
         if self.clock.kind == "continuous":
             el.people_t = el.time
+        el.people_xyz = None
         el.heading, el.elevation, el.view_index = self.view(outcome.heading, elevation)
         el.navigable = el.table.candidates(
             outcome.viewpoint, el.heading, el.elevation, self.cfg.cos_half_hfov()
@@ -238,9 +242,22 @@ class Batch:
         if rule.check == "action":
             return knots_proximity(el.crowd, outcome.knots, rule.threshold)
         if rule.distance == "camera_3d":
-            return state_proximity(el.crowd, el.navigable[0].position, el.people_t, rule.threshold)
+            camera = el.navigable[0].position
+            return state_proximity(self.collision_points(el), camera, rule.threshold)
         base = np.asarray(outcome.knots, float).reshape(-1, 4)[-1, 1:]
         return knots_proximity(el.crowd, [(el.people_t, *base)], rule.threshold)
+
+    def people_at(self, el: Element) -> np.ndarray:
+        """Element ``el``'s people's pelvis positions ``(P, 3)`` as its state has them."""
+        if el.people_xyz is None:
+            el.people_xyz = el.crowd.positions(np.array([el.people_t]))[0]
+        return el.people_xyz
+
+    def collision_points(self, el: Element) -> np.ndarray:
+        """The people as the collision rule measures them: pelvis positions or HA3D's points."""
+        if self.rule.distance == "camera_3d":
+            return ha3d_points(el.crowd, self.people_at(el))
+        return self.people_at(el)
 
     def _images(self, el: Element) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         cfg = self.cfg

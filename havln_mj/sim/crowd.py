@@ -245,45 +245,38 @@ def person_floors(crowd: Crowd) -> np.ndarray:
     return np.array([float(p.anchor[2]) for p in people])
 
 
-def ha3d_points(crowd: Crowd, t: float, floors: np.ndarray | None = None) -> np.ndarray:
-    """HA3D's tracked point of each person at ``t``: ``(P, 3)``.
+def ha3d_points(crowd: Crowd, pelvis: np.ndarray) -> np.ndarray:
+    """HA3D's tracked point of each person: ``(P, 3)``.
 
     The pelvis's horizontal position at :data:`HA3D_TRACK_HEIGHT` above the person's floor
     (HA3D tracked a foot-level vertex of each body and lifted it to camera height).
 
     Args:
         crowd: The people.
-        t: The people's time (seconds).
-        floors: :func:`person_floors` of the crowd, when already known.
+        pelvis: Their pelvis positions ``(P, 3)`` at one time (``crowd.positions``).
     """
-    points = crowd.positions(np.array([float(t)]))[0].copy()
-    points[:, 2] = (person_floors(crowd) if floors is None else floors) + HA3D_TRACK_HEIGHT
+    points = np.array(pelvis, float).reshape(-1, 3)
+    points[:, 2] = person_floors(crowd) + HA3D_TRACK_HEIGHT
     return points
 
 
 def state_proximity(
-    crowd: Crowd,
-    camera: np.ndarray | Sequence[float],
-    t: float,
-    distance: float = COLLISION_DISTANCE,
-    floors: np.ndarray | None = None,
+    points: np.ndarray, camera: np.ndarray | Sequence[float], distance: float = COLLISION_DISTANCE
 ) -> Proximity:
     """HA3D's collision signal of one state: the 3-D distance from the camera to each point.
 
     Args:
-        crowd: The people.
+        points: The people's tracked points ``(P, 3)`` (:func:`ha3d_points`).
         camera: The agent's camera position (HA3D: the viewpoint it stands on).
-        t: The people's time (seconds).
-        distance: Collision when a tracked point is at most this far (metres).
-        floors: :func:`person_floors` of the crowd, when already known.
+        distance: Collision when a point is at most this far (metres).
 
     Returns:
         The people within ``distance`` and the smallest distance to anyone (exact below
         :data:`NEAR_M`, else ``inf``).
     """
-    if len(crowd) == 0:
+    if len(points) == 0:
         return NO_PROXIMITY
-    d = np.linalg.norm(ha3d_points(crowd, t, floors) - np.asarray(camera, float), axis=1)
+    d = np.linalg.norm(np.asarray(points, float) - np.asarray(camera, float), axis=1)
     hit = tuple(int(k) for k in np.flatnonzero(d <= distance))
     smallest = float(d.min())
     return Proximity(bool(hit), hit, smallest if smallest < NEAR_M else math.inf)

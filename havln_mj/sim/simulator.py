@@ -64,7 +64,7 @@ from havln_mj.sim.actions import (
 )
 from havln_mj.sim.batch import WAIT_S, Batch, Element, FilmCallback
 from havln_mj.sim.body import BODY_KINDS, ROBOT_ACTIONS, BodyKind, make_kind
-from havln_mj.sim.crowd import COLLISION_DISTANCE, NO_CROWD, Crowd, ha3d_points
+from havln_mj.sim.crowd import COLLISION_DISTANCE, NO_CROWD, Crowd
 from havln_mj.sim.egocentric import DEFAULT_TURN, EgoAction, ego_to_mattersim, parse_ego_action
 from havln_mj.sim.images import ImageFormat
 from havln_mj.sim.navigation import NavTable
@@ -191,7 +191,7 @@ class Simulator(SimulatorSettings):
         )
         image_format = ImageFormat(cfg.color_order, cfg.depth_units)
         self._batch = Batch(cfg, self._kind, image_format, self._rule, self._timers)
-        self._batch.clock = self._clock
+        self._batch.clock, self._batch.frame = self._clock, self._frame
         self._batch.film = self._film
         self._batch.reactions = self._reactions
         self._rng = np.random.default_rng(cfg.seed)
@@ -200,7 +200,10 @@ class Simulator(SimulatorSettings):
             from havln_mj.sim.people import HumanCrowds  # the humans package, only when used
 
             self._crowds = HumanCrowds(
-                self._library.scan, *self._human_files, together=self._together
+                self._library.scan,
+                *self._human_files,
+                together=self._together,
+                mp3d_dir=cfg.dataset_path,
             )
         else:
             self._crowds = self._humans or None
@@ -272,22 +275,28 @@ class Simulator(SimulatorSettings):
         if self._batch is not None:
             self._batch.rule = rule
 
-    def set_human_clock(self, clock: str | HumanClock) -> None:
+    def set_human_clock(self, clock: str | HumanClock, frame: int = 0) -> None:
         """Which time people are posed at, from the next action on.
 
         Args:
             clock: ``"continuous"``, ``"ha3d"`` or a :class:`~havln_mj.sim.rules.HumanClock`.
-                Choosing HA3D's clock restarts its counter at frame 0.
+            frame: Where HA3D's counter (re)starts (an evaluation resumed mid-way sets the
+                counter it stopped at, :attr:`human_clock_frame`).
 
         Raises:
-            InvalidArgumentError: An unknown clock; HA3D's clock with a per-action collision
-                check or with people who react (HA3D's people do not).
+            InvalidArgumentError: An unknown clock or frame; HA3D's clock with a per-action
+                collision check or with people who react (HA3D's people do not).
         """
         clock = _human_clock(clock)
         _check_pair(self._rule, clock, self._reactions)
-        self._clock = clock
+        bad = isinstance(frame, bool) or not isinstance(frame, numbers.Integral)
+        if bad or not 0 <= frame < clock.frames:
+            raise InvalidArgumentError(
+                f"human clock frame must be an integer in [0, {clock.frames}), got {frame!r}"
+            )
+        self._clock, self._frame = clock, int(frame)
         if self._batch is not None:
-            self._batch.clock, self._batch.frame = clock, 0
+            self._batch.clock, self._batch.frame = clock, self._frame
 
     @property
     def collision_rule(self) -> CollisionRule:
@@ -298,6 +307,11 @@ class Simulator(SimulatorSettings):
     def human_clock(self) -> HumanClock:
         """The people's clock in use."""
         return self._clock
+
+    @property
+    def human_clock_frame(self) -> int:
+        """HA3D's shared frame counter now (0 with the continuous clock)."""
+        return self._batch.frame if self._batch is not None else self._frame
 
     # ------------------------------------------------------------------ episodes
 
@@ -405,10 +419,28 @@ class Simulator(SimulatorSettings):
         return self._batch.elements[element].crowd
 
     def crowd(self, scan_id: str) -> Crowd:
-        """The people of ``scan_id`` (made on first use from the seed and the scan)."""
+        """The people of ``scan_id`` (made on first use from the seed and the scan).
+
+        Raises:
+            MissingDataError: A real scan the placement file does not list, without region
+                labels to place people by (see :mod:`havln_mj.sim.people`).
+        """
         if not self._initialized:
             self.initialize()
         return self._crowd(self._library.table(scan_id))
+
+    def people_source(self, scan_id: str) -> str:
+        """Where the people of ``scan_id`` come from, in words (for banners and reports).
+
+        Raises:
+            MissingDataError: As :meth:`crowd`.
+        """
+        if not self._initialized:
+            self.initialize()
+        if self._crowds is None:
+            return "none (humans=False)"
+        source = getattr(self._crowds, "source", None)
+        return source(scan_id) if source is not None else "the simulator's crowd factory"
 
     def draw(self, element: int = 0) -> tuple[mujoco.MjModel, mujoco.MjData]:
         """Element ``element``'s world posed at its time: the people, the body, its camera.
@@ -598,7 +630,7 @@ class Simulator(SimulatorSettings):
         The ``position`` of every :meth:`getHumanState` entry, without computing the rest.
         """
         self._started("getHumanPositions")
-        return [el.crowd.positions(np.array([el.people_t]))[0] for el in self._batch.elements]
+        return [self._batch.people_at(el).copy() for el in self._batch.elements]
 
     def collision_points(self) -> list[np.ndarray]:
         """Each element's people as the collision rule measures them: ``(K, 3)`` each.
@@ -608,9 +640,7 @@ class Simulator(SimulatorSettings):
         time of the element's last state.
         """
         self._started("collision_points")
-        if self._rule.distance == "horizontal":
-            return self.getHumanPositions()
-        return [ha3d_points(el.crowd, el.people_t) for el in self._batch.elements]
+        return [np.array(self._batch.collision_points(el)) for el in self._batch.elements]
 
     def _started(self, what: str) -> None:
         if self._batch is None or not self._batch.elements:
