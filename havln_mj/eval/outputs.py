@@ -53,12 +53,16 @@ class Outputs:
         self.settings = json.loads(json.dumps(dict(settings)))  # as read back from run.json
         _check_writable(out)
         self.done: dict[tuple[str, str], dict] = {}
+        self.resume = resume
         if resume:
             self._resume()
-        else:
-            self._clear()
-            atomic_write_json(out / RUN, {"settings": self.settings}, indent=1)
         self._file: IO[str] | None = None
+
+    def begin(self) -> None:
+        """Starts writing: a fresh evaluation first removes the folder's earlier results."""
+        if not self.resume:
+            self._clear()
+            atomic_write_json(self.out / RUN, {"settings": self.settings}, indent=1)
 
     def _clear(self) -> None:
         for name in _FILES:

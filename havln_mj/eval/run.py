@@ -502,6 +502,7 @@ def run_cli(args: argparse.Namespace, evaluate: SplitRunner = evaluate_split) ->
 
             torch.set_num_threads(args.threads)
         splits = _splits(args)
+        outputs.begin()
         reports = []
         for split, episodes in splits:
             if evaluate is evaluate_split:
