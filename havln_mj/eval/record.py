@@ -100,7 +100,7 @@ def record_episodes(
         for record in records:
             path_id, _, k = record["instr_id"].rpartition("_")
             episode = by_path[int(path_id)]
-            sim.set_human_clock(sim.human_clock, record["frames"][0])
+            sim.set_rules(frame=record["frames"][0])
             film = _Film(sim)
             sim.set_film(FPS, film)
             trajectory = run_expert(

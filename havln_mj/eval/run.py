@@ -275,7 +275,7 @@ def evaluate_split(
                     resume_frame = done["frames"][1]
                 else:
                     if resume_frame is not None:  # where HA3D's counter was when it stopped
-                        sim.set_human_clock(sim.human_clock, resume_frame)
+                        sim.set_rules(frame=resume_frame)
                         resume_frame = None
                     done = _run_one(sim, episode, k, index, make, args, protocol)
                     done["split"] = split

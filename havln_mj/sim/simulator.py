@@ -168,8 +168,7 @@ class Simulator(SimulatorSettings):
         self._batch: Batch | None = None
         self._rule = CollisionRule.strict(self._collision_distance)
         self._clock = HumanClock.continuous()
-        self.set_collision_rule(collision_rule)
-        self.set_human_clock(human_clock)
+        self.set_rules(collision_rule, human_clock)
         self._rng = np.random.default_rng(self._cfg.seed)
         self._crowd_of: dict[str, Crowd] = {}
         self._film: tuple[float, FilmCallback, tuple[str, ...]] | None = None
@@ -258,45 +257,45 @@ class Simulator(SimulatorSettings):
         if self._batch is not None:
             self._batch.film = self._film
 
-    def set_collision_rule(self, rule: str | CollisionRule) -> None:
-        """When and how collisions are measured, from the next state on.
+    def set_rules(
+        self,
+        collision_rule: str | CollisionRule | None = None,
+        human_clock: str | HumanClock | None = None,
+        frame: int = 0,
+    ) -> None:
+        """When and how collisions are measured, and which time people are posed at.
+
+        Takes effect from the next state on; may be called at any time.
 
         Args:
-            rule: ``"strict"``, ``"ha3d"`` (both with the simulator's ``collision_distance``)
-                or a :class:`~havln_mj.sim.rules.CollisionRule`.
-
-        Raises:
-            InvalidArgumentError: An unknown rule, or one the human clock cannot go with
-                (HA3D's clock poses people only in states: the check must be per state).
-        """
-        rule = _collision_rule(rule, self._collision_distance)
-        _check_pair(rule, self._clock, self._reactions)
-        self._rule = rule
-        if self._batch is not None:
-            self._batch.rule = rule
-
-    def set_human_clock(self, clock: str | HumanClock, frame: int = 0) -> None:
-        """Which time people are posed at, from the next action on.
-
-        Args:
-            clock: ``"continuous"``, ``"ha3d"`` or a :class:`~havln_mj.sim.rules.HumanClock`.
+            collision_rule: ``"strict"``, ``"ha3d"`` (both with the simulator's
+                ``collision_distance``) or a :class:`~havln_mj.sim.rules.CollisionRule`
+                (None: keep the current one).
+            human_clock: ``"continuous"``, ``"ha3d"`` or a
+                :class:`~havln_mj.sim.rules.HumanClock` (None: keep the current one).
             frame: Where HA3D's counter (re)starts (an evaluation resumed mid-way sets the
                 counter it stopped at, :attr:`human_clock_frame`).
 
         Raises:
-            InvalidArgumentError: An unknown clock or frame; HA3D's clock with a per-action
-                collision check or with people who react (HA3D's people do not).
+            InvalidArgumentError: An unknown rule, clock or frame; HA3D's clock with a
+                per-action collision check, or with people who react (HA3D's poses people
+                only in states, and its people do not react).
         """
-        clock = _human_clock(clock)
-        _check_pair(self._rule, clock, self._reactions)
+        rule = (
+            self._rule
+            if collision_rule is None
+            else _collision_rule(collision_rule, self._collision_distance)
+        )
+        clock = self._clock if human_clock is None else _human_clock(human_clock)
+        _check_pair(rule, clock, self._reactions)
         bad = isinstance(frame, bool) or not isinstance(frame, numbers.Integral)
         if bad or not 0 <= frame < clock.frames:
             raise InvalidArgumentError(
                 f"human clock frame must be an integer in [0, {clock.frames}), got {frame!r}"
             )
-        self._clock, self._frame = clock, int(frame)
+        self._rule, self._clock, self._frame = rule, clock, int(frame)
         if self._batch is not None:
-            self._batch.clock, self._batch.frame = clock, self._frame
+            self._batch.rule, self._batch.clock, self._batch.frame = rule, clock, self._frame
 
     @property
     def collision_rule(self) -> CollisionRule:

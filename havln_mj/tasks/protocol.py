@@ -103,8 +103,7 @@ class TaskProtocol:
         Raises:
             InvalidArgumentError: The simulator cannot follow it (e.g. its people react).
         """
-        sim.set_collision_rule(self.collision_rule)
-        sim.set_human_clock(self.human_clock)
+        sim.set_rules(self.collision_rule, self.human_clock)
 
     def with_metrics(self, **changes: object) -> TaskProtocol:
         """A copy with some :class:`MetricConfig` fields changed (e.g. ``count``)."""
