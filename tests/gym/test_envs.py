@@ -267,3 +267,21 @@ def test_simulator_core_does_not_import_gymnasium():
         "assert 'gymnasium' not in sys.modules, 'core imported gymnasium'\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_protocol_option_sets_the_simulators_rules():
+    env = gym.make("HAVLN-Graph-v0", protocol="ha3d", **BLIND)
+    env.reset(seed=0)
+    sim = env.unwrapped.core.sim
+    assert sim.collision_rule.check == "state" and sim.human_clock.kind == "ha3d"
+    frame = sim.human_clock_frame
+    _, _, _, _, info = env.step(1)
+    assert sim.human_clock_frame == sim.human_clock.after_action(frame)  # one action: +32
+    assert isinstance(info["collision"], bool)
+    env.close()
+    strict = GraphEnv(**BLIND)
+    strict.reset(seed=0)
+    assert strict.core.sim.collision_rule.check == "action"
+    strict.close()
+    with pytest.raises(InvalidArgumentError, match="protocol"):
+        GraphEnv(protocol="lenient", **BLIND)
