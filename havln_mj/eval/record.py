@@ -39,6 +39,7 @@ def _simulator(args: argparse.Namespace) -> Simulator:
         body=args.body,
         collision_rule=protocol.collision_rule,
         human_clock=protocol.human_clock,
+        pinned_people=args.pinned_people,
     )
     if args.connectivity_dir:
         sim.setNavGraphPath(str(args.connectivity_dir))

@@ -155,6 +155,7 @@ def _simulator(args: argparse.Namespace) -> Simulator:
         body=args.body,
         collision_rule=protocol.collision_rule,
         human_clock=protocol.human_clock,
+        pinned_people=args.pinned_people,
     )
     if args.connectivity_dir:
         sim.setNavGraphPath(str(args.connectivity_dir))
@@ -322,6 +323,7 @@ def score_split(
         human_clock=asdict(sim.human_clock),
         expert_max_steps=protocol.expert_max_steps if args.agent in EXPERTS else None,
         people=people,
+        pinned_people=bool(getattr(args, "pinned_people", False)),
         instructions=len(runs),
         seconds=round(seconds, 2),
         instructions_per_s=round(len(runs) / seconds, 1) if seconds > 0 else None,
@@ -397,6 +399,11 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     )
     p.add_argument("--seed", type=int, default=0, help="seed of people and random agents (≥ 0)")
     p.add_argument("--no-people", action="store_true", help="evaluate without people")
+    p.add_argument(
+        "--pinned-people",
+        action="store_true",
+        help="people play their motions on the spot where they were placed (HA3D's barely move)",
+    )
     p.add_argument("--connectivity-dir", type=_existing_dir, default=None)
     p.add_argument("--human-placements", type=_existing_file, default=None)
     p.add_argument(
@@ -454,6 +461,7 @@ def settings(args: argparse.Namespace) -> dict:
         "metrics": asdict(protocol.metrics),
         "seed": args.seed,
         "people": not args.no_people,
+        "pinned_people": args.pinned_people,
         "human_placements": path(args.human_placements),
         "connectivity_dir": path(args.connectivity_dir),
         "dataset": [str(d) for d in args.dataset] if args.dataset else None,

@@ -7,12 +7,14 @@ file does not list and whose ``.house`` file cannot be found has no region label
 people by: asking for its people raises :class:`~havln_mj.errors.MissingDataError` naming
 what would give it some, rather than leaving the building silently empty. A HAPS folder
 (motions) and an SMPL model file (skinned bodies) change how people move and look.
+:class:`PinnedCrowd` keeps people on the floor points they were placed at.
 """
 
 from __future__ import annotations
 
 import os
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -114,3 +116,71 @@ class HumanCrowds:
             return populate_ha3d(graph, entries, rng, sources=self._sources)
         self._check_regions(scan_id)
         return populate(self._load(scan_id), rng, sources=self._sources, together=self._together)
+
+
+class PinnedCrowd:
+    """A crowd whose people keep to their anchors: each pelvis stays above its floor point.
+
+    People still play their motions, in place (a walker walks on the spot); what moves them
+    about the room is taken out. HA3D's people barely leave the viewpoints they were placed
+    at; with this, the collision signal and the drawings agree on that. Satisfies
+    :class:`havln_mj.sim.crowd.Crowd` (and keeps ``people``, whose anchors the HA3D distance
+    reads).
+
+    Args:
+        crowd: The people (:class:`havln_mj.humans.crowd.Crowd`).
+    """
+
+    def __init__(self, crowd: Crowd) -> None:
+        self.crowd = crowd
+        self.people = crowd.people
+        self._anchor_xy = np.array([p.anchor[:2] for p in crowd.people], float).reshape(-1, 2)
+
+    def __len__(self) -> int:
+        return len(self.crowd)
+
+    @property
+    def shapes(self) -> list:
+        """Each person's body."""
+        return self.crowd.shapes
+
+    @property
+    def skins(self) -> list:
+        """Each person's skin (or None)."""
+        return self.crowd.skins
+
+    def positions(self, times: np.ndarray, people: np.ndarray | None = None) -> np.ndarray:
+        """Pelvis positions ``(len(times), P, 3)``: the anchors' x, y at the motion's height."""
+        out = np.array(self.crowd.positions(times, people), float)
+        out[..., :2] = self._anchor_xy if people is None else self._anchor_xy[people]
+        return out
+
+    def footprint(self) -> tuple[np.ndarray, np.ndarray]:
+        """Each pelvis never leaves its anchor."""
+        return self._anchor_xy, np.zeros(len(self._anchor_xy))
+
+    def _shift(self, t: float) -> np.ndarray:
+        """``(P, 3)``: what moves each pelvis from where its motion puts it to its anchor."""
+        shift = np.zeros((len(self), 3))
+        shift[:, :2] = self._anchor_xy - self.crowd.positions(np.array([float(t)]))[0][:, :2]
+        return shift
+
+    def pose(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """World joint positions and orientations at ``t``, each body moved onto its anchor."""
+        joints, quats = self.crowd.pose(t)
+        return joints + self._shift(t)[:, None], quats
+
+    def skin_vertices(self, t: float) -> dict:
+        """Skinned people's world vertices at ``t``, moved as :meth:`pose` moves them."""
+        shift = self._shift(t)
+        return {k: v + shift[k] for k, v in self.crowd.skin_vertices(t).items()}
+
+    def states(self, t: float) -> list:
+        """Each person's state at ``t``, on their anchor and not going anywhere."""
+        shift = self._shift(t)
+        out = []
+        for k, s in enumerate(self.crowd.states(t)):
+            velocity = np.array(s.velocity, float)
+            velocity[:2] = 0.0
+            out.append(replace(s, position=np.asarray(s.position) + shift[k], velocity=velocity))
+        return out

@@ -110,6 +110,7 @@ class Simulator(SimulatorSettings):
         reactions: bool | object = False,
         collision_rule: str | CollisionRule = "strict",
         human_clock: str | HumanClock = "continuous",
+        pinned_people: bool = False,
     ) -> None:
         """Creates an uninitialised simulator with MatterSim's default settings.
 
@@ -138,6 +139,9 @@ class Simulator(SimulatorSettings):
                 ``collision_distance`` as the threshold.
             human_clock: ``"continuous"`` (each element's simulated time), ``"ha3d"``
                 (HA3D's shared frame counter) or a :class:`~havln_mj.sim.rules.HumanClock`.
+            pinned_people: People play their motions on the floor points they were placed
+                at, never leaving them (:class:`~havln_mj.sim.people.PinnedCrowd`; HA3D's
+                people barely leave their viewpoints). Not with ``reactions``.
         """
         super().__init__()
         for name, value in (
@@ -155,6 +159,11 @@ class Simulator(SimulatorSettings):
             raise InvalidArgumentError(f"together must be a chance in [0, 1], got {together!r}")
         self._together = float(together)
         self._reactions = _reactions(reactions)
+        if not isinstance(pinned_people, bool):
+            raise InvalidArgumentError(f"pinned_people takes a bool, got {pinned_people!r}")
+        if pinned_people and self._reactions is not None:
+            raise InvalidArgumentError("pinned_people=True needs people who do not react")
+        self._pinned = pinned_people
         self._humans = humans
         self._body_name = body
         self._legged_options = legged
@@ -325,6 +334,10 @@ class Simulator(SimulatorSettings):
                 # Each scan's people depend on the seed and the scan, not on visiting order.
                 rng = np.random.default_rng([self._cfg.seed, zlib.crc32(table.scan_id.encode())])
                 crowd = self._crowds(table.scan_id, table.graph, rng)
+                if self._pinned and len(crowd):
+                    from havln_mj.sim.people import PinnedCrowd  # the humans package, when used
+
+                    crowd = PinnedCrowd(crowd)
             self._crowd_of[table.scan_id] = crowd
         return crowd
 
