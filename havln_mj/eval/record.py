@@ -20,37 +20,15 @@ from pathlib import Path
 import numpy as np
 
 from havln_mj.cache import atomic_write_json
-from havln_mj.eval.run import EXPERTS, make_agent, protocol_of
+from havln_mj.eval.run import EXPERTS, _simulator, make_agent, protocol_of
 from havln_mj.render.video import VideoWriter
 from havln_mj.sim.simulator import Simulator
 from havln_mj.tasks.episodes import Episode
 from havln_mj.tasks.experts import run_expert
 
 FPS = 8.0  # video frames per simulated second
-WIDTH = 320  # pixels; the height keeps the evaluation camera's aspect (its navigable rule)
+WIDTH = 320  # video width in pixels (the height keeps the evaluation camera's aspect)
 MAP_MARGIN = 4.0  # metres of the level shown around the reference path and the walk
-
-
-def _simulator(args: argparse.Namespace) -> Simulator:
-    protocol = protocol_of(args)
-    sim = Simulator(
-        humans=not args.no_people,
-        human_placements=args.human_placements,
-        body=args.body,
-        collision_rule=protocol.collision_rule,
-        human_clock=protocol.human_clock,
-        pinned_people=args.pinned_people,
-    )
-    if args.connectivity_dir:
-        sim.setNavGraphPath(str(args.connectivity_dir))
-    width, height, vfov = protocol.camera or (320, 240, 0.8)
-    sim.setCameraResolution(WIDTH, round(WIDTH * height / width))
-    sim.setCameraVFOV(vfov)
-    sim.setDiscretizedViewingAngles(True)
-    sim.set_color_order("RGB")
-    sim.setSeed(args.seed)
-    sim.initialize()
-    return sim
 
 
 class _Film:
@@ -95,7 +73,7 @@ def record_episodes(
     protocol = protocol_of(args)
     make = make_agent(args.agent, args)
     cap = protocol.expert_max_steps if args.agent in EXPERTS else None
-    sim = _simulator(args)
+    sim = _simulator(args, film_width=WIDTH)
     reports = []
     try:
         for record in records:

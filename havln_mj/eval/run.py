@@ -54,6 +54,7 @@ from tqdm import tqdm
 from havln_mj.errors import HavlnError, InvalidArgumentError
 from havln_mj.eval.outputs import RECORDINGS, Outputs
 from havln_mj.scene.ids import expand_scene_ranges
+from havln_mj.sim.settings import Settings
 from havln_mj.sim.simulator import Simulator
 from havln_mj.tasks.datasets import load_dataset
 from havln_mj.tasks.episodes import Episode
@@ -146,8 +147,12 @@ def make_agent(name: str, args: argparse.Namespace | None = None) -> AgentFactor
         raise InvalidArgumentError(f"cannot load agent {name!r}: {exc}") from None
 
 
-def _simulator(args: argparse.Namespace) -> Simulator:
-    """The evaluation's simulator: rendering off, discretised views, the protocol's rules."""
+def _simulator(args: argparse.Namespace, film_width: int | None = None) -> Simulator:
+    """The evaluation's simulator: discretised views, the protocol's rules and camera.
+
+    Rendering is off, unless ``film_width`` asks for RGB frames that wide (the height keeps
+    the protocol camera's aspect, which decides the navigable neighbours).
+    """
     protocol = protocol_of(args)
     sim = Simulator(
         humans=not args.no_people,
@@ -155,15 +160,18 @@ def _simulator(args: argparse.Namespace) -> Simulator:
         body=args.body,
         collision_rule=protocol.collision_rule,
         human_clock=protocol.human_clock,
-        pinned_people=args.pinned_people,
+        pinned_people=getattr(args, "pinned_people", False),
     )
     if args.connectivity_dir:
         sim.setNavGraphPath(str(args.connectivity_dir))
-    if protocol.camera is not None:
-        width, height, vfov = protocol.camera
-        sim.setCameraResolution(width, height)
-        sim.setCameraVFOV(vfov)
-    sim.setRenderingEnabled(False)
+    default = Settings()
+    width, height, vfov = protocol.camera or (default.width, default.height, default.vfov)
+    if film_width is not None:
+        width, height = film_width, round(film_width * height / width)
+        sim.set_color_order("RGB")
+    sim.setCameraResolution(width, height)
+    sim.setCameraVFOV(vfov)
+    sim.setRenderingEnabled(film_width is not None)
     sim.setDiscretizedViewingAngles(True)
     sim.setSeed(args.seed)
     sim.initialize()
