@@ -8,8 +8,8 @@
   re-plans every step on the graph without the nodes within 1 m of the people within 4.5 m of
   the agent (the current node and the goal kept); ``mode="global"`` plans once on G' = G
   without the nodes within 1 m of anyone at the start. When no path exists it waits (index 0,
-  no turn), up to ``max_waits`` times per episode, then walks on ignoring people; with
-  ``blocked="stop"`` it stops, as HA3D's does (see :mod:`havln_mj.tasks.protocol`).
+  no turn), up to ``max_waits`` times per episode, then walks on ignoring people (or stops:
+  ``after_waits``); HA3D's stops at once (see :mod:`havln_mj.tasks.protocol`).
 * :class:`RandomWalkExpert`: seeded random egocentric actions, at most 30 steps (VLN-DT data).
 
 :func:`run_expert` runs one episode and returns a :class:`Trajectory`: one record per action
@@ -39,14 +39,13 @@ from havln_mj.tasks.ego_routes import EgoRoutes, ego_plan, forward_target
 from havln_mj.tasks.episodes import Episode
 from havln_mj.tasks.planning import (
     CLEARANCE,
-    DISTANCES,
     SIGHT_RADIUS,
     TURN,
     PathPlanner,
     graph_teacher,
     plan_path,
 )
-from havln_mj.tasks.protocol import DEFAULT_MAX_WAITS, TaskProtocol, get_protocol
+from havln_mj.tasks.protocol import DEFAULT_MAX_WAITS, ExpertRules, TaskProtocol, get_protocol
 from havln_mj.tasks.rewards import RewardFn
 from havln_mj.tasks.step import STOP, Action, GraphAction, StepResult, TaskStep
 
@@ -206,14 +205,14 @@ class HumanAwareExpert:
     With graph actions, when no path avoids people it waits (index 0, no turn) and re-plans,
     at most ``max_waits`` times per episode; after that it walks the shortest path
     regardless of people (counting those steps in ``walked_through``), so one blocked
-    episode cannot wait to the step cap. With ``blocked="stop"`` it stops instead, as
-    HA3D's expert does (its "no path" answer is the end action).
+    episode cannot wait to the step cap, or with ``after_waits="stop"`` it stops. HA3D's
+    expert stops at once (``max_waits=0``): its "no path" answer is the end action.
 
     With egocentric actions (``action_space="ego"``, the teacher of the egocentric agents)
     it follows :func:`ego_plan` with FORWARD kept out of the avoided nodes. The egocentric set
     has no wait, and HA3D's "no path" answer would teach an agent to stop beside people; so
-    when no route avoids them it takes the shortest egocentric route regardless, counting
-    the step in ``waits`` (with ``blocked="stop"``: it stops).
+    when no route avoids them it takes the shortest egocentric route regardless (counted in
+    ``walked_through``), or with ``after_waits="stop"`` it stops.
 
     Args:
         mode: ``"local"`` re-plans each step around the people within ``sight_radius`` of
@@ -226,15 +225,14 @@ class HumanAwareExpert:
         distance: ``"horizontal"`` (pelvis positions on the viewpoint's storey, as the strict
             collision rule) or ``"camera_3d"`` (HA3D: 3-D between viewpoint cameras and the
             simulator's :meth:`~havln_mj.sim.simulator.Simulator.collision_points`).
-        blocked: ``"wait"`` or ``"stop"`` when no path avoids people.
-        max_waits: Waits per episode before walking on regardless (None: no bound).
+        max_waits: Waits per episode before ``after_waits`` (None: no bound).
+        after_waits: ``"walk"`` (on, ignoring people) or ``"stop"``.
         max_steps: Default cap on actions.
 
     Attributes:
         last_plan: The path planned at the last step (None when blocked; graph actions).
-        waits: How many times the expert waited in the current episode (ego: went on
-            without a route around people).
-        walked_through: Steps taken ignoring people after ``max_waits`` waits.
+        waits: How many times the expert waited in the current episode.
+        walked_through: Steps taken ignoring people in the current episode.
     """
 
     def __init__(
@@ -246,8 +244,8 @@ class HumanAwareExpert:
         clearance: float = CLEARANCE,
         weighted: bool = True,
         distance: str = "horizontal",
-        blocked: str = "wait",
         max_waits: int | None = DEFAULT_MAX_WAITS,
+        after_waits: str = "walk",
         max_steps: int = 150,
     ) -> None:
         if mode not in ("local", "global"):
@@ -259,25 +257,15 @@ class HumanAwareExpert:
         for name, value in (("sight_radius", sight_radius), ("clearance", clearance)):
             if not (isinstance(value, int | float) and value >= 0 and math.isfinite(value)):
                 raise InvalidArgumentError(f"{name} must be a finite number ≥ 0, got {value!r}")
-        if distance not in DISTANCES:
-            raise InvalidArgumentError(f"distance {distance!r} unknown; valid: {DISTANCES}")
-        if blocked not in ("wait", "stop"):
-            raise InvalidArgumentError(f"blocked {blocked!r} unknown; valid: 'wait', 'stop'")
-        bad = isinstance(max_waits, bool) or not isinstance(max_waits, int) or max_waits < 0
-        if max_waits is not None and bad:
-            raise InvalidArgumentError(
-                f"max_waits must be an integer ≥ 0 or None, got {max_waits!r}"
-            )
+        rules = ExpertRules(distance, bool(weighted), max_waits, after_waits)  # checks them
         self.mode = mode
         self.action_space = action_space
-        self.distance = distance
-        self.blocked = blocked
-        self.max_waits = max_waits
+        self.distance, self.weighted = rules.distance, rules.weighted
+        self.max_waits, self.after_waits = rules.max_waits, rules.after_waits
         self.walked_through = 0
         self.name = f"human_aware_{mode}" + ("_ego" if action_space == "ego" else "")
         self.sight_radius = float(sight_radius)
         self.clearance = float(clearance)
-        self.weighted = weighted
         self.max_steps = _positive("max_steps", max_steps)
         self.last_plan: list[str] | None = None
         self.waits = 0
@@ -303,8 +291,8 @@ class HumanAwareExpert:
             action_space=action_space,
             weighted=rules.weighted,
             distance=rules.distance,
-            blocked=rules.blocked,
             max_waits=rules.max_waits,
+            after_waits=rules.after_waits,
             max_steps=max_steps,
         )
 
@@ -366,16 +354,16 @@ class HumanAwareExpert:
         if step is None:  # continuous headings: plan from here
             plan = ego_plan(graph, here, state.heading, goal, self._hfov, avoid)
             if plan is None:
-                if self.blocked == "stop":
+                if self.after_waits == "stop":
                     return STOP
-                self.waits += 1
+                self.walked_through += 1
                 plan = ego_plan(graph, here, state.heading, goal, self._hfov)
             return STOP if plan is None else plan[0]
         action = routes.first_action(here, step, goal, avoid)
         if action is None:
-            if self.blocked == "stop":
+            if self.after_waits == "stop":
                 return STOP
-            self.waits += 1
+            self.walked_through += 1
             action = routes.first_action(here, step, goal, frozenset())
         return STOP if action is None else action
 
@@ -395,11 +383,11 @@ class HumanAwareExpert:
             path = None if self._route is None else self._route[self._route.index(here) :]
         self.last_plan = path
         if path is None:
-            if self.blocked == "stop":
-                return STOP
             if self.max_waits is None or self.waits < self.max_waits:
                 self.waits += 1
                 return WAIT
+            if self.after_waits == "stop":
+                return STOP
             path = self._planner(ctx).plan(here, goal, weighted=self.weighted)
             if path is None:
                 return STOP  # the goal cannot be reached from here at all

@@ -39,7 +39,6 @@ TURN = DEFAULT_TURN  # 30°: one discrete view step, and the teacher's heading t
 SIGHT_RADIUS = 4.5  # metres: HA3D's expert avoids people this close to the agent
 CLEARANCE = 1.0  # metres: nodes this close to such a person are removed
 STOREY_BELOW, STOREY_ABOVE = 0.5, 2.0  # a pelvis this far below / above a floor is on it
-DISTANCES = ("horizontal", "camera_3d")
 
 
 # ---------------------------------------------------------------------- people

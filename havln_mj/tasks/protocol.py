@@ -13,8 +13,8 @@ Each rule, strict (the default) first, then HA3D's (with where its code says so)
   tracked point per person (``src/utils/get_info.py``, ``getHumanLocations``).
 * **People's clock**: each episode's simulated time; HA3D: one 120-frame counter shared by
   every episode, +16 frames at a start and +32 per action.
-* **Sub-optimal expert when blocked**: it waits, and after ``max_waits`` waits walks on
-  ignoring people; HA3D: it stops (its "no path" answer is the end action:
+* **Sub-optimal expert when blocked**: it waits, and after ``max_waits`` (10) waits in an
+  episode walks on ignoring people; HA3D: it stops (its "no path" answer is the end action:
   ``tasks/HA/utils.py``, ``tasks/HA/env.py``).
 * **Expert planning**: shortest by length, removing the nodes within 1 m (horizontally, on
   their storey) of people within 4.5 m; HA3D: fewest hops, the same radii in 3-D.
@@ -35,6 +35,7 @@ import math
 from dataclasses import dataclass, field, replace
 
 from havln_mj.errors import InvalidArgumentError
+from havln_mj.sim.rules import DISTANCES
 from havln_mj.tasks.metrics.config import MetricConfig
 
 PROTOCOL_NAMES = ("strict", "ha3d")
@@ -46,32 +47,38 @@ DEFAULT_MAX_WAITS = 10
 class ExpertRules:
     """How the human-aware (sub-optimal) expert plans and what it does when boxed in.
 
+    When no path avoids people, the expert waits (stays a second and re-plans) up to
+    ``max_waits`` times per episode, then does ``after_waits``: ``"walk"`` on along the
+    shortest path ignoring people, or ``"stop"``. HA3D's expert stops at once
+    (``max_waits=0, after_waits="stop"``).
+
     Attributes:
         distance: ``"horizontal"`` (to pelvis positions, on the viewpoint's storey) or
             ``"camera_3d"`` (HA3D: 3-D between viewpoint cameras and tracked points).
         weighted: Shortest paths by length (True) or by hops (HA3D).
-        blocked: ``"wait"`` (stay a second and re-plan) or ``"stop"`` (HA3D).
-        max_waits: With ``"wait"``: waits per episode before the expert walks on along
-            the shortest path ignoring people (None: wait for ever).
+        max_waits: Waits per episode before ``after_waits`` (None: wait for ever).
+        after_waits: ``"walk"`` or ``"stop"``.
     """
 
     distance: str = "horizontal"
     weighted: bool = True
-    blocked: str = "wait"
     max_waits: int | None = DEFAULT_MAX_WAITS
+    after_waits: str = "walk"
 
     def __post_init__(self) -> None:
-        if self.distance not in ("horizontal", "camera_3d"):
+        if self.distance not in DISTANCES:
             raise InvalidArgumentError(
-                f"expert distance {self.distance!r} unknown; valid: 'horizontal', 'camera_3d'"
+                f"expert distance {self.distance!r} unknown; valid: {DISTANCES}"
             )
-        if self.blocked not in ("wait", "stop"):
-            raise InvalidArgumentError(
-                f"expert blocked rule {self.blocked!r} unknown; valid: 'wait', 'stop'"
-            )
+        if not isinstance(self.weighted, bool):
+            raise InvalidArgumentError(f"weighted takes a bool, got {self.weighted!r}")
         m = self.max_waits
         if m is not None and (isinstance(m, bool) or not isinstance(m, int) or m < 0):
             raise InvalidArgumentError(f"max_waits must be an integer ≥ 0 or None, got {m!r}")
+        if self.after_waits not in ("walk", "stop"):
+            raise InvalidArgumentError(
+                f"after_waits {self.after_waits!r} unknown; valid: 'walk', 'stop'"
+            )
 
 
 @dataclass(frozen=True)
@@ -116,7 +123,7 @@ HA3D = TaskProtocol(
     collision_rule="ha3d",
     human_clock="ha3d",
     metrics=MetricConfig.ha3d(),
-    expert=ExpertRules(distance="camera_3d", weighted=False, blocked="stop", max_waits=None),
+    expert=ExpertRules(distance="camera_3d", weighted=False, max_waits=0, after_waits="stop"),
     expert_max_steps=20,
     camera=(640, 480, math.radians(60.0)),
 )

@@ -168,15 +168,21 @@ def test_stop_when_blocked_and_the_strict_wait_bound(graph):
     actions = [r.action for r in tr.steps]
     assert actions[:3] == [WAIT] * 3 and WAIT not in actions[3:]
     assert tr.stopped and tr.final_viewpoint == c and strict.walked_through > 0
-    # With no bound it waits to the step cap.
+    # Or stops after its waits; with no bound it waits to the step cap.
+    patient = HumanAwareExpert("local", max_waits=2, after_waits="stop")
+    tr = run_expert(sim, episode, patient, protocol="strict")
+    assert [r.action for r in tr.steps] == [WAIT, WAIT, STOP] and tr.path == [a]
     forever = HumanAwareExpert("local", max_waits=None)
     tr = run_expert(sim, episode, forever, protocol="strict", max_steps=25)
     assert not tr.stopped and forever.waits == 25
+    with pytest.raises(InvalidArgumentError, match="after_waits"):
+        HumanAwareExpert(after_waits="run")
 
 
 def test_ha3d_expert_plans_by_hops_in_3d(graph):
     expert = HumanAwareExpert.for_protocol("ha3d")
-    assert (expert.weighted, expert.distance, expert.blocked) == (False, "camera_3d", "stop")
+    rules = (expert.weighted, expert.distance, expert.max_waits, expert.after_waits)
+    assert rules == (False, "camera_3d", 0, "stop")
     planner = PathPlanner(graph)
     vp = graph.nodes[0]
     cam = graph.position(vp)
