@@ -493,8 +493,22 @@ def _splits(args: argparse.Namespace) -> list[tuple[str, list[Episode]]]:
         data = load_dataset(name, connectivity_dir=args.connectivity_dir, data_dir=args.data_dir)
         if not data.episodes:
             raise InvalidArgumentError(f"dataset {data.source} has no episodes")
+        _check_instructions(data.source, data.episodes)
         splits.append((args.split or Path(str(name)).stem, list(data.episodes)))
     return splits
+
+
+def _check_instructions(source: str, episodes: Sequence[Episode]) -> None:
+    """Refuses paths that would be dropped (no instruction) or scored blind (a blank one)."""
+    none = [e.path_id for e in episodes if not e.instructions]
+    blank = [e.path_id for e in episodes if any(not t.strip() for t in e.instructions)]
+    for ids, what in ((none, "no instructions"), (blank, "a blank instruction")):
+        if ids:
+            shown = ", ".join(map(str, ids[:5])) + (" ..." if len(ids) > 5 else "")
+            raise InvalidArgumentError(
+                f"dataset {source}: {len(ids)} path(s) with {what} (path_id {shown}); "
+                "every path needs at least one instruction, none of them empty"
+            )
 
 
 def run_cli(args: argparse.Namespace, evaluate: SplitRunner = evaluate_split) -> int:

@@ -212,3 +212,15 @@ def test_the_go1_body_runs_the_same_split(tmp_path):
     summary = _summary(out)
     assert summary["body"] == "go1" and summary["sr"] == 1.0 and summary["collisions"] == 0
     assert summary["instructions"] == 3
+
+
+def test_paths_without_instructions_or_with_blank_ones_are_refused(tmp_path, shared_data, capsys):
+    data = json.loads((shared_data / "ha_r2r" / "HA_val_seen.json").read_text())[:3]
+    for change, message in (([], "no instructions"), (["go", " "], "a blank instruction")):
+        data[1]["instructions"] = change
+        path = tmp_path / "bad.json"
+        path.write_text(json.dumps(data))
+        argv = ["--dataset", str(path), "--no-people", "--out", str(tmp_path / "o")]
+        assert main([*argv, "--connectivity-dir", str(shared_data / "mp3d_connectivity")]) == 2
+        err = capsys.readouterr().err
+        assert message in err and str(data[1]["path_id"]) in err
