@@ -44,11 +44,6 @@ STOREY_BELOW, STOREY_ABOVE = 0.5, 2.0  # a pelvis this far below / above a floor
 # ---------------------------------------------------------------------- people
 
 
-def _floors(graph: NavGraph, nodes: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
-    xy = np.array([graph.position(v)[:2] for v in nodes]).reshape(-1, 2)
-    return xy, np.array([graph.floor_z(v) for v in nodes])
-
-
 def _near(xy: np.ndarray, floor: np.ndarray, people: np.ndarray, radius: float) -> np.ndarray:
     """(N,) bool: points (xy, floor height) with a pelvis within ``radius`` on their storey."""
     if len(people) == 0 or len(xy) == 0:
@@ -104,35 +99,29 @@ def blocked_nodes(
     ``distance`` as in :func:`people_near`. Nodes in ``keep`` (the agent's and the goal) are
     never blocked.
     """
-    if distance == "camera_3d":
-        cameras = np.array([graph.position(v) for v in graph.nodes]).reshape(-1, 3)
-        return _blocked_3d(graph.nodes, cameras, people, clearance, keep)
-    xy, floor = _floors(graph, graph.nodes)
-    return _blocked(graph.nodes, xy, floor, people, clearance, keep)
+    return _blocked(graph.nodes, *_cameras(graph), people, clearance, keep, distance)
+
+
+def _cameras(graph: NavGraph) -> tuple[np.ndarray, np.ndarray]:
+    """Every node's camera position ``(N, 3)`` and floor height ``(N,)``."""
+    cameras = np.array([graph.position(v) for v in graph.nodes]).reshape(-1, 3)
+    return cameras, np.array([graph.floor_z(v) for v in graph.nodes])
 
 
 def _blocked(
     nodes: Sequence[str],
-    xy: np.ndarray,
+    cameras: np.ndarray,
     floor: np.ndarray,
     people: Iterable[np.ndarray],
     clearance: float,
     keep: Iterable[str],
+    distance: str,
 ) -> set[str]:
     pts = np.asarray(list(people), float).reshape(-1, 3)
-    hit = _near(xy, floor, pts, clearance)
-    return {nodes[i] for i in np.flatnonzero(hit)} - set(keep)
-
-
-def _blocked_3d(
-    nodes: Sequence[str],
-    cameras: np.ndarray,
-    people: Iterable[np.ndarray],
-    clearance: float,
-    keep: Iterable[str],
-) -> set[str]:
-    pts = np.asarray(list(people), float).reshape(-1, 3)
-    hit = _near_3d(cameras, pts, clearance)
+    if distance == "camera_3d":
+        hit = _near_3d(cameras, pts, clearance)
+    else:
+        hit = _near(cameras[:, :2], floor, pts, clearance)
     return {nodes[i] for i in np.flatnonzero(hit)} - set(keep)
 
 
@@ -170,12 +159,8 @@ class PathPlanner:
         self._length_list = lengths.data.tolist()
 
     @cached_property
-    def _floors(self) -> tuple[np.ndarray, np.ndarray]:
-        return _floors(self.graph, self.graph.nodes)
-
-    @cached_property
-    def _cameras(self) -> np.ndarray:
-        return np.array([self.graph.position(v) for v in self.graph.nodes]).reshape(-1, 3)
+    def _nodes(self) -> tuple[np.ndarray, np.ndarray]:
+        return _cameras(self.graph)
 
     def people_near(
         self,
@@ -186,8 +171,9 @@ class PathPlanner:
     ) -> np.ndarray:
         """:func:`people_near` on this planner's graph (node positions read once)."""
         k = self._order[vp]
+        cameras, floors = self._nodes
         pts = np.asarray(people, float).reshape(-1, 3)
-        return pts[_people_mask(self._cameras[k], self._floors[1][k], pts, radius, distance)]
+        return pts[_people_mask(cameras[k], floors[k], pts, radius, distance)]
 
     def blocked(
         self,
@@ -197,9 +183,7 @@ class PathPlanner:
         distance: str = "horizontal",
     ) -> set[str]:
         """:func:`blocked_nodes` on this planner's graph (node positions read once)."""
-        if distance == "camera_3d":
-            return _blocked_3d(self.graph.nodes, self._cameras, people, clearance, keep)
-        return _blocked(self.graph.nodes, *self._floors, people, clearance, keep)
+        return _blocked(self.graph.nodes, *self._nodes, people, clearance, keep, distance)
 
     def plan(
         self, start: str, goal: str, blocked: Iterable[str] = (), *, weighted: bool = True
