@@ -176,7 +176,7 @@ class Simulator(SimulatorSettings):
         self._kind: BodyKind | None = None
         self._batch: Batch | None = None
         self._rule = CollisionRule.strict(self._collision_distance)
-        self._clock = HumanClock.continuous()
+        self._clock, self._frame = HumanClock.continuous(), 0
         self.set_rules(collision_rule, human_clock)
         self._rng = np.random.default_rng(self._cfg.seed)
         self._crowd_of: dict[str, Crowd] = {}
@@ -270,7 +270,7 @@ class Simulator(SimulatorSettings):
         self,
         collision_rule: str | CollisionRule | None = None,
         human_clock: str | HumanClock | None = None,
-        frame: int = 0,
+        frame: int | None = None,
     ) -> None:
         """When and how collisions are measured, and which time people are posed at.
 
@@ -283,7 +283,8 @@ class Simulator(SimulatorSettings):
             human_clock: ``"continuous"``, ``"ha3d"`` or a
                 :class:`~havln_mj.sim.rules.HumanClock` (None: keep the current one).
             frame: Where HA3D's counter (re)starts (an evaluation resumed mid-way sets the
-                counter it stopped at, :attr:`human_clock_frame`).
+                counter it stopped at, :attr:`human_clock_frame`); None keeps the counter
+                when the clock stays the same, else starts it at 0.
 
         Raises:
             InvalidArgumentError: An unknown rule, clock or frame; HA3D's clock with a
@@ -297,6 +298,8 @@ class Simulator(SimulatorSettings):
         )
         clock = self._clock if human_clock is None else _human_clock(human_clock)
         _check_pair(rule, clock, self._reactions)
+        if frame is None:
+            frame = self.human_clock_frame if clock == self._clock else 0
         bad = isinstance(frame, bool) or not isinstance(frame, numbers.Integral)
         if bad or not 0 <= frame < clock.frames:
             raise InvalidArgumentError(

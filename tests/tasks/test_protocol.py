@@ -104,6 +104,23 @@ def test_protocols_by_name_and_what_they_configure():
     assert sim.collision_rule.check == "action" and sim.human_clock.kind == "continuous"
     TaskStep(sim)  # no protocol: the simulator's rules are left alone
     assert sim.collision_rule.check == "action"
+
+
+def test_the_ha3d_clock_runs_on_across_episodes_and_task_steps(graph):
+    # HA3D's counter is shared by every episode: a new task step does not restart it.
+    a, b, c = _two_hop_path(graph)
+    sim = _sim([])
+    episode = _episode(graph, (a, b, c))
+    run_expert(sim, episode, ShortestPathExpert(), protocol="ha3d")
+    clock, frame = sim.human_clock, sim.human_clock_frame
+    TaskStep(sim, protocol="ha3d").start([episode])
+    assert sim.human_clock_frame == clock.after_start(frame)
+    sim.set_rules(frame=40)
+    TaskStep(sim, protocol="ha3d")
+    assert sim.human_clock_frame == 40
+    TaskStep(sim, protocol="strict")
+    TaskStep(sim, protocol="ha3d")  # a new clock starts at 0
+    assert sim.human_clock_frame == 0
     with pytest.raises(InvalidArgumentError, match="react"):
         TaskStep(Simulator(humans=False, reactions=True), protocol="ha3d")
 
