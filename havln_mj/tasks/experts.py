@@ -274,6 +274,8 @@ class HumanAwareExpert:
         self._hfov = DEFAULT_HALF_HFOV
         self._routes: dict[str, EgoRoutes] = {}
         self._planners: dict[str, PathPlanner] = {}
+        self._last_key: tuple | None = None  # the local plan's inputs, and the plan
+        self._last_path: list[str] | None = None
 
     @classmethod
     def for_protocol(
@@ -311,6 +313,14 @@ class HumanAwareExpert:
         if planner is None or planner.graph is not ctx.graph:
             planner = self._planners[ctx.episode.scan] = PathPlanner(ctx.graph)
         return planner
+
+    def _local_plan(self, ctx: ExpertContext, here: str, blocked: frozenset) -> list[str] | None:
+        """The plan around ``blocked``; the last one again while nothing changed (turns)."""
+        key = (ctx.episode.scan, here, ctx.goal, blocked)
+        if self._last_key != key:
+            path = self._planner(ctx).plan(here, ctx.goal, blocked, weighted=self.weighted)
+            self._last_key, self._last_path = key, path
+        return self._last_path
 
     def _blocked_near(self, ctx: ExpertContext, here: str) -> set[str]:
         """Local mode: the nodes near the people within sight of ``here``."""
@@ -375,8 +385,7 @@ class HumanAwareExpert:
         if here == goal:
             return STOP
         if self.mode == "local":
-            blocked = self._blocked_near(ctx, here)
-            path = self._planner(ctx).plan(here, goal, blocked, weighted=self.weighted)
+            path = self._local_plan(ctx, here, frozenset(self._blocked_near(ctx, here)))
         else:
             if self._route is None or here not in self._route:
                 self._route = self._global_route(ctx, here)
