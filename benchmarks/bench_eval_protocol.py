@@ -22,15 +22,10 @@ from pathlib import Path
 
 from common import machine
 
+from havln_mj.eval.cli import parse_args
 from havln_mj.eval.run import _run_one as run_one
-from havln_mj.eval.run import (
-    _simulator,
-    make_agent,
-    parse_args,
-    people_report,
-    protocol_of,
-    score_split,
-)
+from havln_mj.eval.run import score_split
+from havln_mj.eval.setup import evaluation_simulator, make_agent, people_report, protocol_of
 from havln_mj.tasks.datasets import load_dataset
 
 _DEFAULT_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
@@ -46,7 +41,7 @@ def _evaluate(data: Path, protocol: str, agent: str, episodes: list) -> dict:
         ]
     )  # fmt: skip
     t0 = time.perf_counter()
-    sim = _simulator(args)
+    sim = evaluation_simulator(args)
     people = people_report(sim, episodes)
     make, proto = make_agent(agent, args), protocol_of(args)
     t1 = time.perf_counter()

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from havln_mj.cache import atomic_write_json
-from havln_mj.eval.run import EXPERTS, _simulator, make_agent, protocol_of
+from havln_mj.eval.setup import EXPERTS, evaluation_simulator, make_agent, protocol_of
 from havln_mj.render.video import VideoWriter
 from havln_mj.sim.simulator import Simulator
 from havln_mj.tasks.episodes import Episode
@@ -73,7 +73,7 @@ def record_episodes(
     protocol = protocol_of(args)
     make = make_agent(args.agent, args)
     cap = protocol.expert_max_steps if args.agent in EXPERTS else None
-    sim = _simulator(args, film_width=WIDTH)
+    sim = evaluation_simulator(args, film_width=WIDTH)
     reports = []
     try:
         for record in records:

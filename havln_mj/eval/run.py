@@ -40,191 +40,39 @@ top-down map each, see :mod:`havln_mj.eval.record`).
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import sys
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict
-from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
-from havln_mj.errors import HavlnError, InvalidArgumentError
+from havln_mj.errors import HavlnError
+from havln_mj.eval.cli import load_splits, parse_args, settings
 from havln_mj.eval.outputs import RECORDINGS, Outputs
-from havln_mj.scene.ids import expand_scene_ranges
-from havln_mj.sim.settings import Settings
-from havln_mj.sim.simulator import Simulator
-from havln_mj.tasks.datasets import load_dataset
-from havln_mj.tasks.episodes import Episode
-from havln_mj.tasks.experts import (
-    Expert,
-    HumanAwareExpert,
-    RandomWalkExpert,
-    ShortestPathExpert,
-    run_expert,
+from havln_mj.eval.setup import (
+    EXPERTS,
+    AgentFactory,
+    banner,
+    blank_instructions,
+    evaluation_simulator,
+    make_agent,
+    people_report,
+    protocol_of,
 )
-from havln_mj.tasks.metrics import EvalEpisode, Evaluator, MetricConfig
-from havln_mj.tasks.metrics.config import COUNT_MODES, CRITICAL_MODES
-from havln_mj.tasks.procedural import procedural_episodes
-from havln_mj.tasks.protocol import PROTOCOL_NAMES, TaskProtocol, get_protocol
+from havln_mj.sim.simulator import Simulator
+from havln_mj.tasks.episodes import Episode
+from havln_mj.tasks.experts import run_expert
+from havln_mj.tasks.metrics import EvalEpisode, Evaluator
+from havln_mj.tasks.protocol import TaskProtocol
 
-AGENTS = ("shortest", "oracle", "oracle-global", "random")
+__all__ = ["evaluate_split", "main", "make_agent", "parse_args", "run_cli", "score_split"]
+
+_simulator = evaluation_simulator  # the name the Ray evaluation imports
+
 TABLE = (("NE", "ne"), ("TCR", "tcr"), ("CR", "cr"), ("SR", "sr"))
-EXPERTS = ("shortest", "oracle", "oracle-global")  # capped by the protocol's expert step cap
-
-AgentFactory = Callable[[np.random.Generator], Expert]
-
-
-def protocol_of(args: argparse.Namespace) -> TaskProtocol:
-    """The protocol ``args`` names, its metrics changed by ``--critical`` and ``--count``.
-
-    ``--critical ha3d`` is HA3D's whole metric rule (:meth:`MetricConfig.ha3d`: people
-    labelled Beginning/End, no clipping, raw CR); ``paper`` is ours; ``none`` adjusts nothing.
-    """
-    protocol = get_protocol(getattr(args, "protocol", "strict"))
-    critical = getattr(args, "critical", None)
-    if critical is not None:
-        base = {"paper": MetricConfig(), "ha3d": MetricConfig.ha3d()}.get(
-            critical, MetricConfig(critical="none")
-        )
-        protocol = protocol.with_metrics(**asdict(base))
-    count = getattr(args, "count", None)
-    if count is not None:
-        protocol = protocol.with_metrics(count=count)
-    return protocol
-
-
-def metric_config(args: argparse.Namespace) -> MetricConfig:
-    """How ``args``' evaluation scores episodes."""
-    return protocol_of(args).metrics
-
-
-def make_agent(name: str, args: argparse.Namespace | None = None) -> AgentFactory:
-    """The factory of an agent given by name, ``module:callable`` or checkpoint file.
-
-    Args:
-        name: The agent.
-        args: The evaluation's arguments (the protocol shapes the sub-optimal expert; a
-            checkpoint agent renders features with its seed, connectivity folder and
-            placements).
-
-    Raises:
-        InvalidArgumentError: Unknown name, or a ``module:callable`` that cannot be imported.
-        MissingDataError: A checkpoint file that does not exist.
-    """
-    if name.endswith(".pt"):
-        from havln_mj.agents.policy import load_agent  # torch: only for trained agents
-
-        return load_agent(
-            name,
-            seed=getattr(args, "seed", 0),
-            connectivity_dir=getattr(args, "connectivity_dir", None),
-            human_placements=getattr(args, "human_placements", None),
-        )
-    protocol = protocol_of(args) if args is not None else get_protocol("strict")
-    experts = {
-        "shortest": lambda: ShortestPathExpert("graph"),
-        "oracle": lambda: HumanAwareExpert.for_protocol(protocol, "local"),
-        "oracle-global": lambda: HumanAwareExpert.for_protocol(protocol, "global"),
-    }
-    if name in experts:
-        # One expert for every episode (it resets itself): its planners are kept per scan.
-        expert = experts[name]()
-        return lambda rng: expert
-    if name == "random":
-        return lambda rng: RandomWalkExpert(rng)
-    module, _, attr = name.partition(":")
-    if not attr:
-        raise InvalidArgumentError(
-            f"unknown agent {name!r}; valid: {', '.join(AGENTS)}, 'module:callable' or a "
-            "checkpoint file (.pt)"
-        )
-    try:
-        return getattr(importlib.import_module(module), attr)
-    except (ImportError, AttributeError) as exc:
-        raise InvalidArgumentError(f"cannot load agent {name!r}: {exc}") from None
-
-
-def _simulator(args: argparse.Namespace, film_width: int | None = None) -> Simulator:
-    """The evaluation's simulator: discretised views, the protocol's rules and camera.
-
-    Rendering is off, unless ``film_width`` asks for RGB frames that wide (the height keeps
-    the protocol camera's aspect, which decides the navigable neighbours).
-    """
-    protocol = protocol_of(args)
-    sim = Simulator(
-        humans=not args.no_people,
-        human_placements=args.human_placements,
-        body=args.body,
-        collision_rule=protocol.collision_rule,
-        human_clock=protocol.human_clock,
-        pinned_people=getattr(args, "pinned_people", False),
-    )
-    if args.connectivity_dir:
-        sim.setNavGraphPath(str(args.connectivity_dir))
-    default = Settings()
-    width, height, vfov = protocol.camera or (default.width, default.height, default.vfov)
-    if film_width is not None:
-        width, height = film_width, round(film_width * height / width)
-        sim.set_color_order("RGB")
-    sim.setCameraResolution(width, height)
-    sim.setCameraVFOV(vfov)
-    sim.setRenderingEnabled(film_width is not None)
-    sim.setDiscretizedViewingAngles(True)
-    sim.setSeed(args.seed)
-    sim.initialize()
-    return sim
-
-
-def people_report(sim: Simulator, episodes: Sequence[Episode]) -> dict:
-    """Who the split is evaluated with, checked against the people its episodes name.
-
-    Raises:
-        MissingDataError: A real scan with nobody to place (see :mod:`havln_mj.sim.people`).
-        InvalidArgumentError: An episode names a person (HA-R2R ``human_viewpoint``) the
-            simulator does not place: the placements are not the dataset's.
-    """
-    scans = sorted({e.scan for e in episodes})
-    sources: dict[str, list[str]] = {}
-    count = 0
-    for scan in scans:
-        crowd = sim.crowd(scan)
-        count += len(crowd)
-        sources.setdefault(sim.people_source(scan), []).append(scan)
-        placed = {getattr(p, "viewpoint", "") for p in getattr(crowd, "people", ())}
-        for e in episodes:
-            named = {h.viewpoint for h in e.humans or ()} if e.scan == scan else set()
-            missing = sorted(named - placed)
-            if missing and len(crowd):
-                raise InvalidArgumentError(
-                    f"path {e.path_id} names people at {missing} in scan {scan}, where the "
-                    "simulator places nobody: these placements are not the ones the dataset "
-                    "was made with (--human-placements)"
-                )
-    named = sum(len(e.humans or ()) for e in episodes)
-    return {
-        "count": count,
-        "scans": len(scans),
-        "named_by_episodes": named,
-        "sources": {src: len(s) for src, s in sources.items()},
-    }
-
-
-def _banner(args: argparse.Namespace, split: str, episodes: Sequence[Episode], people: dict) -> str:
-    protocol = protocol_of(args)
-    n = sum(len(e.instructions) for e in episodes)
-    where = "; ".join(f"{src} in {k} scan(s)" for src, k in people["sources"].items())
-    lines = [
-        f"eval {split}: agent {args.agent}, protocol {protocol.name}, {n} instructions in "
-        f"{people['scans']} scan(s)",
-        f"people: {people['count']} — {where}",
-    ]
-    blank = blank_instructions(episodes)
-    if blank:
-        lines.append(f"note: {len(blank)} blank instruction(s), evaluated as given: {blank}")
-    return "\n".join(lines)
 
 
 def _run_one(
@@ -275,10 +123,10 @@ def evaluate_split(
             already done, when resuming); None keeps everything in memory.
     """
     protocol = protocol_of(args)
-    sim = _simulator(args)
+    sim = evaluation_simulator(args)
     try:
         people = people_report(sim, episodes)
-        print(_banner(args, split, episodes, people), file=sys.stderr, flush=True)
+        print(banner(args, split, episodes, people), file=sys.stderr, flush=True)
         make = make_agent(args.agent, args)
         records = []
         index, resume_frame = 0, None
@@ -359,167 +207,7 @@ def markdown_table(summaries: Sequence[dict]) -> str:
     return "\n".join([head, rule, f"| {name} | " + " | ".join(cells) + " |"])
 
 
-def _existing_dir(text: str) -> Path:
-    path = Path(text).expanduser()
-    if not path.is_dir():
-        raise argparse.ArgumentTypeError(f"{text!r} is not a folder")
-    return path
-
-
-def _existing_file(text: str) -> Path:
-    path = Path(text).expanduser()
-    if not path.is_file():
-        raise argparse.ArgumentTypeError(f"{text!r} is not a file")
-    return path
-
-
-def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
-    """Parses and checks the command-line arguments, before any work is done."""
-    p = argparse.ArgumentParser(prog="python -m havln_mj.eval", description=__doc__.splitlines()[0])
-    src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--dataset", nargs="+", help="R2R/HA-R2R JSON files or split names")
-    src.add_argument(
-        "--scenes", nargs="+", help="procedural scene ids (proc-<seed>; proc-A:B for a range)"
-    )
-    p.add_argument("--split", default=None, help="name of the split in the tables")
-    p.add_argument("--per-scene", type=int, default=10, help="episodes per procedural scene (≥ 1)")
-    p.add_argument(
-        "--skip", type=int, default=0, help="leave out each scene's first paths (val_seen; ≥ 0)"
-    )
-    p.add_argument(
-        "--agent",
-        default="shortest",
-        help=f"{', '.join(AGENTS)}, module:callable or a trained agent's checkpoint (.pt)",
-    )
-    p.add_argument("--body", choices=("point", "go1"), default="point")
-    p.add_argument(
-        "--protocol",
-        choices=PROTOCOL_NAMES,
-        default="strict",
-        help="strict (ours, the default) or ha3d (HA3D's code, to compare with the paper)",
-    )
-    p.add_argument(
-        "--critical",
-        choices=CRITICAL_MODES,
-        default=None,
-        help="unavoidable people: paper (crux points, clipped), ha3d (HA3D's whole metric "
-        "rule: Beginning/End, unclipped, raw CR) or none (default: the protocol's)",
-    )
-    p.add_argument(
-        "--count",
-        choices=COUNT_MODES,
-        default=None,
-        help="collisions per step (HA3D) or per visited viewpoint (default: step)",
-    )
-    p.add_argument("--seed", type=int, default=0, help="seed of people and random agents (≥ 0)")
-    p.add_argument("--no-people", action="store_true", help="evaluate without people")
-    p.add_argument(
-        "--pinned-people",
-        action="store_true",
-        help="people play their motions on the spot where they were placed (HA3D's barely move)",
-    )
-    p.add_argument("--connectivity-dir", type=_existing_dir, default=None)
-    p.add_argument("--human-placements", type=_existing_file, default=None)
-    p.add_argument(
-        "--data-dir", type=_existing_dir, default=None, help="folder with r2r/ and ha_r2r/"
-    )
-    p.add_argument("--out", type=Path, default=Path("havln_eval"))
-    p.add_argument(
-        "--resume",
-        action="store_true",
-        help="continue the interrupted evaluation in --out (same arguments)",
-    )
-    p.add_argument(
-        "--record",
-        type=int,
-        default=0,
-        metavar="N",
-        help="film the first N instructions: a video and a top-down map each (≥ 0)",
-    )
-    p.add_argument(
-        "--threads", type=int, default=None, help="torch threads of a trained agent (≥ 1)"
-    )
-    args = p.parse_args(argv)
-    checks = [
-        (args.per_scene >= 1, f"--per-scene must be at least 1, got {args.per_scene}"),
-        (args.skip >= 0, f"--skip must be ≥ 0, got {args.skip}"),
-        (0 <= args.seed < 2**32, f"--seed must be in [0, 2^32), got {args.seed}"),
-        (args.record >= 0, f"--record must be ≥ 0 instructions, got {args.record}"),
-        (
-            args.threads is None or args.threads >= 1,
-            f"--threads must be at least 1, got {args.threads}",
-        ),
-        (not args.out.is_file(), f"--out {str(args.out)!r} is a file; give a folder"),
-        (args.split is None or args.split.strip(), f"--split must be a name, got {args.split!r}"),
-        (args.agent.strip(), "--agent must name an agent"),
-    ]
-    for ok, message in checks:
-        if not ok:
-            p.error(message)
-    if args.critical is None:
-        args.critical = get_protocol(args.protocol).metrics.critical
-    return args
-
-
-def settings(args: argparse.Namespace) -> dict:
-    """What decides an evaluation's results (``run.json``; ``--resume`` must match it)."""
-
-    def path(p: Path | None) -> str | None:
-        return None if p is None else str(Path(p).expanduser().resolve())
-
-    protocol = protocol_of(args)
-    return {
-        "agent": args.agent,
-        "body": args.body,
-        "protocol": protocol.name,
-        "metrics": asdict(protocol.metrics),
-        "seed": args.seed,
-        "people": not args.no_people,
-        "pinned_people": args.pinned_people,
-        "human_placements": path(args.human_placements),
-        "connectivity_dir": path(args.connectivity_dir),
-        "dataset": [str(d) for d in args.dataset] if args.dataset else None,
-        "scenes": args.scenes,
-        "per_scene": args.per_scene if args.scenes else None,
-        "skip": args.skip if args.scenes else None,
-        "split": args.split,
-    }
-
-
 SplitRunner = Callable[[argparse.Namespace, list[Episode], str], dict]
-
-
-def _splits(args: argparse.Namespace) -> list[tuple[str, list[Episode]]]:
-    if args.scenes:
-        scenes = expand_scene_ranges(args.scenes)
-        episodes = procedural_episodes(scenes, args.per_scene, args.seed, args.skip)
-        return [(args.split or "procedural", episodes)]
-    splits = []
-    for name in args.dataset:
-        data = load_dataset(name, connectivity_dir=args.connectivity_dir, data_dir=args.data_dir)
-        if not data.episodes:
-            raise InvalidArgumentError(f"dataset {data.source} has no episodes")
-        _check_instructions(data.source, data.episodes)
-        splits.append((args.split or Path(str(name)).stem, list(data.episodes)))
-    return splits
-
-
-def _check_instructions(source: str, episodes: Sequence[Episode]) -> None:
-    """Refuses paths without instructions: they would be dropped from the split unseen."""
-    ids = [e.path_id for e in episodes if not e.instructions]
-    if ids:
-        shown = ", ".join(map(str, ids[:5])) + (" ..." if len(ids) > 5 else "")
-        raise InvalidArgumentError(
-            f"dataset {source}: {len(ids)} path(s) with no instructions (path_id {shown}); "
-            "every path needs at least one"
-        )
-
-
-def blank_instructions(episodes: Sequence[Episode]) -> list[str]:
-    """The ids of blank instructions (HA-R2R val_seen has 13): evaluated, and reported."""
-    return [
-        f"{e.path_id}_{k}" for e in episodes for k, t in enumerate(e.instructions) if not t.strip()
-    ]
 
 
 def run_cli(args: argparse.Namespace, evaluate: SplitRunner = evaluate_split) -> int:
@@ -542,7 +230,7 @@ def run_cli(args: argparse.Namespace, evaluate: SplitRunner = evaluate_split) ->
             import torch  # a trained agent: torch is installed
 
             torch.set_num_threads(args.threads)
-        splits = _splits(args)
+        splits = load_splits(args)
         outputs.begin()
         reports = []
         for split, episodes in splits:
