@@ -23,8 +23,7 @@ from pathlib import Path
 from common import machine
 
 from havln_mj.eval.cli import parse_args
-from havln_mj.eval.run import _run_one as run_one
-from havln_mj.eval.run import score_split
+from havln_mj.eval.run import run_instruction, score_split
 from havln_mj.eval.setup import evaluation_simulator, make_agent, people_report, protocol_of
 from havln_mj.tasks.datasets import load_dataset
 
@@ -48,7 +47,7 @@ def _evaluate(data: Path, protocol: str, agent: str, episodes: list) -> dict:
     records, index = [], 0
     for episode in episodes:
         for k in range(len(episode.instructions)):
-            records.append(run_one(sim, episode, k, index, make, args, proto))
+            records.append(run_instruction(sim, episode, k, index, make, args, proto))
             index += 1
     t2 = time.perf_counter()
     summary = score_split(args, episodes, "val_seen", records, sim, people)["summary"]

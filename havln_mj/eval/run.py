@@ -75,7 +75,7 @@ _simulator = evaluation_simulator  # the name the Ray evaluation imports
 TABLE = (("NE", "ne"), ("TCR", "tcr"), ("CR", "cr"), ("SR", "sr"))
 
 
-def _run_one(
+def run_instruction(
     sim: Simulator,
     episode: Episode,
     k: int,
@@ -139,7 +139,7 @@ def evaluate_split(
                     if resume_frame is not None:  # where HA3D's counter was when it stopped
                         sim.set_rules(frame=resume_frame)
                         resume_frame = None
-                    done = _run_one(sim, episode, k, index, make, args, protocol)
+                    done = run_instruction(sim, episode, k, index, make, args, protocol)
                     done["split"] = split
                     if outputs is not None:
                         outputs.add(done)
