@@ -91,6 +91,8 @@ class EpisodeEnv:
         data_dir: Where split names are looked up (default ``$HAVLN_VLN_DATA``).
         scan_dir: The scans' mesh folder (the simulator's ``setDatasetPath``).
         humans: Whether scans have people.
+        human_placements: HA3D's placement file, which gives real scans their people
+            (default ``$HAVLN_HA3D_PLACEMENTS``; a real scan without it is an error).
         width: Image width (pixels).
         height: Image height (pixels).
         vfov: Vertical field of view (radians; default MatterSim's).
@@ -127,6 +129,7 @@ class EpisodeEnv:
         data_dir: str | Path | None = None,
         scan_dir: str | Path | None = None,
         humans: bool = True,
+        human_placements: str | Path | None = None,
         width: int = 128,
         height: int = 128,
         vfov: float | None = None,
@@ -155,6 +158,7 @@ class EpisodeEnv:
         self._humans = bool(humans)
         self._restricted = bool(restricted_navigation)
         self._paths = (connectivity_dir, scan_dir)
+        self._placements = human_placements
         if isinstance(episode_seed, bool) or not isinstance(episode_seed, numbers.Integral):
             raise InvalidArgumentError(f"episode_seed must be an integer, got {episode_seed!r}")
         self.episode_seed = int(episode_seed)
@@ -222,6 +226,7 @@ class EpisodeEnv:
         obs = self.observations
         sim = Simulator(
             humans=self._humans,
+            human_placements=self._placements,
             body=self.body,
             collision_rule=self.protocol.collision_rule,
             human_clock=self.protocol.human_clock,

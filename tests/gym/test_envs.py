@@ -19,6 +19,7 @@ from gymnasium.utils.env_checker import check_env  # noqa: E402
 from havln_mj.errors import (  # noqa: E402
     InvalidActionError,
     InvalidArgumentError,
+    MissingDataError,
     NotInitializedError,
 )
 from havln_mj.gym import ENV_IDS, EgoEnv, GraphEnv  # noqa: E402 - registers the ids
@@ -285,3 +286,22 @@ def test_protocol_option_sets_the_simulators_rules():
     strict.close()
     with pytest.raises(InvalidArgumentError, match="protocol"):
         GraphEnv(protocol="lenient", **BLIND)
+
+
+def test_real_scans_need_their_people(shared_data, monkeypatch):
+    monkeypatch.delenv("HAVLN_HA3D_PLACEMENTS", raising=False)
+    where = {
+        "dataset": shared_data / "r2r" / "R2R_val_seen.json",
+        "connectivity_dir": shared_data / "mp3d_connectivity",
+        "scenes": ["17DRP5sb8fy"],
+        **BLIND,
+    }
+    env = GraphEnv(**where)
+    with pytest.raises(MissingDataError, match="human_placements"):
+        env.reset(seed=0)
+    env.close()
+    placements = shared_data / "ha3d" / "human_placements.json"
+    env = GraphEnv(human_placements=placements, **where)
+    env.reset(seed=0)
+    assert len(env.core.sim.crowd("17DRP5sb8fy")) > 0
+    env.close()
