@@ -209,10 +209,10 @@ class HumanAwareExpert:
     expert stops at once (``max_waits=0``): its "no path" answer is the end action.
 
     With egocentric actions (``action_space="ego"``, the teacher of the egocentric agents)
-    it follows :func:`ego_plan` with FORWARD kept out of the avoided nodes. The egocentric set
-    has no wait, and HA3D's "no path" answer would teach an agent to stop beside people; so
-    when no route avoids them it takes the shortest egocentric route regardless (counted in
-    ``walked_through``), or with ``after_waits="stop"`` it stops.
+    it follows :func:`~havln_mj.tasks.ego_routes.ego_plan` with FORWARD kept out of the avoided
+    nodes. The egocentric set has no wait, and HA3D's "no path" answer would teach an agent to
+    stop beside people; so when no route avoids them it takes the shortest egocentric route
+    regardless (counted in ``walked_through``), or with ``after_waits="stop"`` it stops.
 
     Args:
         mode: ``"local"`` re-plans each step around the people within ``sight_radius`` of
