@@ -218,8 +218,8 @@ def run_cli(args: argparse.Namespace, evaluate: SplitRunner = evaluate_split) ->
     the split is done.
 
     Returns:
-        The process exit code: 0, 2 on bad input or a failure (with the message on stderr),
-        130 when interrupted (finished instructions are kept for ``--resume``).
+        0 when done; 2 on bad input or a failure (with the message on stderr); 130 when
+        interrupted (finished instructions are kept for ``--resume``).
     """
     out = args.out.expanduser().resolve()
     outputs = None

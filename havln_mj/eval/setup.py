@@ -35,7 +35,8 @@ AgentFactory = Callable[[np.random.Generator], Expert]
 def protocol_of(args: argparse.Namespace) -> TaskProtocol:
     """The protocol ``args`` names, its metrics changed by ``--critical`` and ``--count``.
 
-    ``--critical ha3d`` is HA3D's whole metric rule (:meth:`MetricConfig.ha3d`: people
+    ``--critical ha3d`` is HA3D's whole metric rule
+    (:meth:`~havln_mj.tasks.metrics.config.MetricConfig.ha3d`: people
     labelled Beginning/End, no clipping, raw CR); ``paper`` is ours; ``none`` adjusts nothing.
     """
     protocol = get_protocol(getattr(args, "protocol", "strict"))

@@ -31,7 +31,8 @@ from havln_mj.humans.population import read_ha3d_placements
 from havln_mj.scene.connectivity import read_connectivity
 from havln_mj.sim.crowd import COLLISION_DISTANCE
 
-AFFECTED_M = 1.5  # HA3D getRelPos: a person within 1.5 m of a path node is on the path
+AFFECTED_M = 1.5
+"""Metres within which HA3D's ``getRelPos`` links a person to a path node."""
 PAPER = {"affected": 0.0816, "in_view": 0.4647}
 
 

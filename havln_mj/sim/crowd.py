@@ -226,9 +226,11 @@ def track_proximity(
 # ---------------------------------------------------------------------- HA3D's distance
 
 HA3D_TRACK_HEIGHT = 1.36
-"""Metres above a person's floor of the point HA3D tracks per person: HA3D stands each body
-1.36 m below its viewpoint's camera and tracks the mesh vertex nearest the body's floor
-origin, mapped back up by 1.36 m (``src/utils/get_info.py``, ``getHumanLocations``)."""
+"""How high above a person's floor HA3D's tracked point is, in metres.
+
+HA3D stands each body 1.36 m below its viewpoint's camera and tracks the mesh vertex nearest
+the body's floor origin, mapped back up by 1.36 m (``src/utils/get_info.py``,
+``getHumanLocations``)."""
 
 
 def person_floors(crowd: Crowd) -> np.ndarray:

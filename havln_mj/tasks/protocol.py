@@ -26,7 +26,7 @@ Each rule, strict (the default) first, then HA3D's (with where its code says so)
   decides which neighbours are navigable).
 
 Collisions are counted per step (turns included) in both; ``count="viewpoint"`` on the
-:class:`~havln_mj.tasks.metrics.MetricConfig` counts each visit to a viewpoint once.
+:class:`~havln_mj.tasks.metrics.config.MetricConfig` counts each visit to a viewpoint once.
 """
 
 from __future__ import annotations
@@ -113,7 +113,7 @@ class TaskProtocol:
         sim.set_rules(self.collision_rule, self.human_clock)
 
     def with_metrics(self, **changes: object) -> TaskProtocol:
-        """A copy with some :class:`MetricConfig` fields changed (e.g. ``count``)."""
+        """A copy with some fields of its metrics changed (e.g. ``count``)."""
         return replace(self, metrics=replace(self.metrics, **changes))
 
 
