@@ -13,6 +13,12 @@ from havln_mj.sim.simulator import Simulator
 SCAN = "17DRP5sb8fy"
 
 
+def _cached(scan):
+    """The cached scan folder's files and their times (empty when none is cached)."""
+    folder = scans_dir() / scan
+    return {p: p.stat().st_mtime_ns for p in folder.rglob("*")} if folder.is_dir() else {}
+
+
 def _sim(shared_data, **kw):
     sim = Simulator(humans=True, **kw)
     sim.setNavGraphPath(str(shared_data / "mp3d_connectivity"))
@@ -23,13 +29,14 @@ def _sim(shared_data, **kw):
 def test_a_real_scan_without_placements_or_regions_is_an_error(shared_data, monkeypatch):
     monkeypatch.delenv("HAVLN_HA3D_PLACEMENTS", raising=False)
     monkeypatch.delenv("HAVLN_MP3D_DIR", raising=False)
+    before = _cached(SCAN)
     sim = _sim(shared_data)
     with pytest.raises(MissingDataError, match="human_placements") as err:
         sim.newEpisode([SCAN], [""], [0.0], [0.0])
     assert "--human-placements" in str(err.value) and "humans=False" in str(err.value)
     with pytest.raises(MissingDataError):
         sim.people_source(SCAN)
-    assert not (scans_dir() / SCAN).exists()  # no graph proxy was built to find that out
+    assert _cached(SCAN) == before  # no graph proxy was built to find that out
 
 
 def test_placements_say_where_people_come_from(shared_data):
