@@ -5,6 +5,11 @@ arguments): it starts the elements' bodies, turns graph actions into body moves 
 rules (discretised or continuous), advances each element's clock by what its body reports,
 computes the collision signal along the body's track, renders the state through the frame
 pipeline and, when a film is set, frames during actions.
+
+What the collision signal covers and which time people are posed at follow the batch's
+:class:`~havln_mj.sim.rules.CollisionRule` and :class:`~havln_mj.sim.rules.HumanClock`
+(strict by default; HA3D's on request). Each element's people are posed at its
+``people_t``: its own simulated time, or the time of HA3D's shared frame counter.
 """
 
 from __future__ import annotations
@@ -15,10 +20,19 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from havln_mj.sim.body import Body, BodyKind, Film, Outcome
-from havln_mj.sim.crowd import NO_PROXIMITY, Crowd, knots_proximity, sample_knots
+from havln_mj.sim.crowd import (
+    NO_PROXIMITY,
+    Crowd,
+    Proximity,
+    ha3d_points,
+    knots_proximity,
+    sample_knots,
+    state_proximity,
+)
 from havln_mj.sim.frame import View
 from havln_mj.sim.images import ImageFormat
 from havln_mj.sim.navigation import NavTable
+from havln_mj.sim.rules import CollisionRule, HumanClock
 from havln_mj.sim.settings import Settings
 from havln_mj.sim.state import SimState, ViewPoint
 from havln_mj.sim.viewing import (
@@ -45,6 +59,8 @@ class Element:
         "film",
         "heading",
         "navigable",
+        "people_t",
+        "people_xyz",
         "state",
         "step",
         "table",
@@ -54,7 +70,8 @@ class Element:
 
     def __init__(self, table: NavTable, crowd: Crowd, body: Body) -> None:
         self.table, self.crowd, self.body = table, crowd, body
-        self.heading = self.elevation = self.time = 0.0
+        self.heading = self.elevation = self.time = self.people_t = 0.0
+        self.people_xyz: np.ndarray | None = None  # pelvis positions at people_t, once asked
         self.view_index = self.step = 0
         self.navigable: list[ViewPoint] = []
         self.state: SimState | None = None
@@ -68,8 +85,13 @@ class Batch:
         cfg: The simulator's settings (read at every step: the camera may change).
         kind: Makes the bodies.
         image_format: Turns rendered views into state images.
-        collision_distance: HA-VLN's collision threshold (metres, horizontal).
+        rule: When and how collisions are measured (its threshold included).
         timers: The simulator's timers (rendering time and frames are added).
+
+    Attributes:
+        rule: The collision rule (read at every state).
+        clock: The people's clock.
+        frame: HA3D's shared frame counter (with ``clock.kind == "ha3d"``).
     """
 
     def __init__(
@@ -77,11 +99,13 @@ class Batch:
         cfg: Settings,
         kind: BodyKind,
         image_format: ImageFormat,
-        collision_distance: float,
+        rule: CollisionRule,
         timers: dict,
     ) -> None:
         self.cfg, self.kind, self.format = cfg, kind, image_format
-        self.collision_distance = collision_distance
+        self.rule = rule
+        self.clock = HumanClock.continuous()
+        self.frame = 0
         self.timers = timers
         self.elements: list[Element] = []
         self.film: tuple[float, FilmCallback, tuple[str, ...]] | None = None
@@ -112,10 +136,19 @@ class Batch:
             el.heading, el.elevation, _ = self.view(h, e)
             elements.append(el)
         self.elements = elements
+        shared = self._tick(self.clock.after_start)
         for i, (el, start) in enumerate(zip(elements, starts, strict=True)):
+            el.people_t = shared if shared is not None else el.time
             el.film = self._new_film(i, el)
             outcome = el.body.start(start[2], el.heading, el.elevation, 0.0)
             self.finish(i, outcome, el.elevation, starting=True)
+
+    def _tick(self, advance: Callable[[int], int]) -> float | None:
+        """Advances HA3D's shared counter and returns the people's time (None: own clocks)."""
+        if self.clock.kind != "ha3d":
+            return None
+        self.frame = advance(self.frame)
+        return self.clock.seconds(self.frame)
 
     def _new_film(self, i: int, el: Element) -> Film | None:
         if self.film is None or not self.cfg.rendering:
@@ -125,8 +158,10 @@ class Batch:
         def draw(t: float) -> None:
             t0 = time.perf_counter()
             settings = self.cfg.view_settings()
-            views = [el.body.render(settings, el.elevation, t)]
-            views += [el.body.render(settings, 0.0, t, cam) for cam in cameras]
+            # On HA3D's clock people hold the pose of the state the action leads to.
+            people_t = t if self.clock.kind == "continuous" else el.people_t
+            views = [el.body.render(settings, el.elevation, people_t)]
+            views += [el.body.render(settings, 0.0, people_t, cam) for cam in cameras]
             self.timers["render"] += time.perf_counter() - t0
             self.timers["frames"] += len(views)
             callback(i, t, views, np.asarray(el.body.pose(), float))
@@ -138,8 +173,11 @@ class Batch:
     ) -> None:
         """Move, then rotate, for each (element, index, dh, de); ``waits`` override WAIT_S."""
         discretized, limits = self.cfg.discretized, self.cfg.elevation_limits
+        shared = self._tick(self.clock.after_action) if actions else None
         for n, (i, k, dh, de) in enumerate(actions):
             el = self.elements[i]
+            if shared is not None:
+                el.people_t = shared
             if discretized:
                 dh = discrete_delta(dh, HEADING_INCREMENT)
                 de = discrete_delta(de, ELEVATION_INCREMENT)
@@ -153,8 +191,11 @@ class Batch:
 
     def robot(self, actions: Sequence[str]) -> None:
         """A robot action per element (``"stop"`` leaves it alone)."""
+        shared = self._tick(self.clock.after_action)
         for i, (el, act) in enumerate(zip(self.elements, actions, strict=True)):
             if act != "stop":
+                if shared is not None:
+                    el.people_t = shared
                 self.finish(i, el.body.robot_action(act, el.time, el.film), el.elevation)
 
     def finish(self, i: int, outcome: Outcome, elevation: float, starting: bool = False) -> None:
@@ -163,13 +204,14 @@ class Batch:
         if not starting:
             el.time += outcome.duration
             el.step += 1
+        if self.clock.kind == "continuous":
+            el.people_t = el.time
+        el.people_xyz = None
         el.heading, el.elevation, el.view_index = self.view(outcome.heading, elevation)
         el.navigable = el.table.candidates(
             outcome.viewpoint, el.heading, el.elevation, self.cfg.cos_half_hfov()
         )
-        contact = NO_PROXIMITY
-        if len(el.crowd):
-            contact = knots_proximity(el.crowd, outcome.knots, self.collision_distance)
+        contact = self._contact(el, outcome) if len(el.crowd) else NO_PROXIMITY
         if starting and el.film is not None:
             el.film.tick(el.time)
         rgb, depth, mask = self._images(el)
@@ -195,12 +237,35 @@ class Batch:
             outcome.diverged,
         )
 
+    def _contact(self, el: Element, outcome: Outcome) -> Proximity:
+        """The collision signal of the state just reached, by the batch's rule."""
+        rule = self.rule
+        if rule.check == "action":
+            return knots_proximity(el.crowd, outcome.knots, rule.threshold)
+        if rule.distance == "camera_3d":
+            camera = el.navigable[0].position
+            return state_proximity(self.collision_points(el), camera, rule.threshold)
+        base = np.asarray(outcome.knots, float).reshape(-1, 4)[-1, 1:]
+        return knots_proximity(el.crowd, [(el.people_t, *base)], rule.threshold)
+
+    def people_at(self, el: Element) -> np.ndarray:
+        """Element ``el``'s people's pelvis positions ``(P, 3)`` as its state has them."""
+        if el.people_xyz is None:
+            el.people_xyz = el.crowd.positions(np.array([el.people_t]))[0]
+        return el.people_xyz
+
+    def collision_points(self, el: Element) -> np.ndarray:
+        """The people as the collision rule measures them: pelvis positions or HA3D's points."""
+        if self.rule.distance == "camera_3d":
+            return ha3d_points(el.crowd, self.people_at(el))
+        return self.people_at(el)
+
     def _images(self, el: Element) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         cfg = self.cfg
         if not cfg.rendering:
             return (*self.format.blank(cfg.width, cfg.height), None)
         t0 = time.perf_counter()
-        view = el.body.render(self.cfg.view_settings(), el.elevation, el.time)
+        view = el.body.render(self.cfg.view_settings(), el.elevation, el.people_t)
         images = self.format.images(view)
         self.timers["render"] += time.perf_counter() - t0
         self.timers["frames"] += 1
