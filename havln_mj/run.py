@@ -272,6 +272,7 @@ def run(args: argparse.Namespace) -> dict:
     out = (args.out or Path.cwd() / "havln_runs" / scene.replace("/", "_")).expanduser().resolve()
     with staged_outputs(out) as stage:
         sim = make_simulator(args, "point")
+        source = sim.people_source(scene)  # fails before a graph proxy is built for nobody
         scan, crowd = sim.scan(scene), sim.crowd(scene)
         print(f"havln_mj {__version__}: {scan.description}", flush=True)
         print(
@@ -300,6 +301,7 @@ def run(args: argparse.Namespace) -> dict:
             "seed": args.seed,
             "resolution": [args.width, args.height],
             "vfov_deg": args.vfov,
+            "people_source": source,
             "people": [
                 {
                     "activity": p.activity,

@@ -70,7 +70,6 @@ from havln_mj.tasks.protocol import TaskProtocol
 
 __all__ = ["evaluate_split", "main", "make_agent", "parse_args", "run_cli", "score_split"]
 
-_simulator = evaluation_simulator  # the name the Ray evaluation imports
 
 TABLE = (("NE", "ne"), ("TCR", "tcr"), ("CR", "cr"), ("SR", "sr"))
 
