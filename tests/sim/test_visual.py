@@ -120,7 +120,7 @@ def test_untextured_part_renders_its_rgba_and_geoms_are_visual_only(tmp_path):
     assert names == ["visual/0_painted", "visual/1_plain_wall_1", "visual/2_painted"]
     assert np.all(model.geom_contype == 0) and np.all(model.geom_conaffinity == 0)
     assert np.all(model.geom_group == groups.VISUAL)
-    assert model.ntex == 1 and model.nmat == 2  # one image, uploaded once
+    assert model.ntex == 1 and model.nmat == 1  # one image, uploaded once; one shared material
     assert model.geom_matid[1] == -1
     np.testing.assert_allclose(model.geom_rgba[1], (0, 1, 0, 1))
 

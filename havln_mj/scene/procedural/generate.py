@@ -11,10 +11,12 @@ from havln_mj.cache import atomic_write_json
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.scene.boxes import BoxSet
 from havln_mj.scene.connectivity import Connectivity, write_connectivity
-from havln_mj.scene.mesh import boxes_to_parts, write_glb
+from havln_mj.scene.matterport.categories import SEMANTICS
+from havln_mj.scene.mesh import write_glb
 from havln_mj.scene.procedural.build import house_boxes
 from havln_mj.scene.procedural.furnish import Item, door_keepouts, furnish_room, inner_rect
 from havln_mj.scene.procedural.layout import FloorPlan, plan_house
+from havln_mj.scene.procedural.look import dress_house
 from havln_mj.scene.procedural.recipe import Recipe, load_recipe
 from havln_mj.scene.procedural.viewpoints import (
     ViewpointGraph,
@@ -25,7 +27,7 @@ from havln_mj.scene.regions import Level, Region, Regions, SceneObject
 from havln_mj.scene.scanfolder import BOXES, CONNECTIVITY, MESH_GLB, META, REGIONS
 
 # Bump when generator code changes what a seed produces: cached scans are rebuilt.
-GENERATOR_VERSION = 1
+GENERATOR_VERSION = 2
 
 
 @dataclass(frozen=True)
@@ -40,7 +42,12 @@ class ProceduralHouse:
     viewpoints: ViewpointGraph
     connectivity: Connectivity
     regions: Regions
-    recipe_digest: str
+    recipe: Recipe
+
+    @property
+    def recipe_digest(self) -> str:
+        """The digest of the recipe the house was drawn from."""
+        return self.recipe.digest
 
     @property
     def area(self) -> float:
@@ -117,12 +124,12 @@ def generate_house(
         viewpoint_region={vp: int(r) for vp, r in zip(ids, vg.room, strict=True)},
     )
     return ProceduralHouse(
-        scene_id, int(seed), plan, tuple(items), boxes, vg, connectivity, regions, recipe.digest
+        scene_id, int(seed), plan, tuple(items), boxes, vg, connectivity, regions, recipe
     )
 
 
 def write_scan(house: ProceduralHouse, folder: Path, *, with_boxes: bool = True) -> None:
-    """Writes the scan folder: mesh, connectivity, regions, metadata (and exact boxes).
+    """Writes the scan folder: mesh, part labels, connectivity, regions, metadata (and boxes).
 
     Args:
         house: The generated house.
@@ -131,7 +138,9 @@ def write_scan(house: ProceduralHouse, folder: Path, *, with_boxes: bool = True)
             without it, the world builder decomposes the mesh with CoACD like a real scan.
     """
     folder.mkdir(parents=True, exist_ok=True)
-    write_glb(boxes_to_parts(house.boxes), folder / MESH_GLB)
+    parts, labels = dress_house(house)
+    write_glb(parts, folder / MESH_GLB)
+    labels.write(folder / SEMANTICS)
     write_connectivity(folder / CONNECTIVITY, house.connectivity)
     house.regions.write(folder / REGIONS)
     if with_boxes:
