@@ -136,6 +136,15 @@ def label_files(mesh: Path, scan_id: str, layout: str) -> tuple[Path, Path]:
     return mesh.parent / f"{scan_id}_semantic.ply", mesh.parent / f"{scan_id}.house"
 
 
+SKYBOX_FOLDER = "matterport_skybox_images"
+
+
+def skybox_folders(scan_id: str, root: Path | str) -> list[Path]:
+    """Where a scan's ``matterport_skybox_images`` folder may be, in the order tried."""
+    root = Path(root).expanduser()
+    return [root.joinpath(*parts, scan_id, SKYBOX_FOLDER) for parts in _RAW_BASES]
+
+
 def find_house_file(scan_id: str, root: Path | str | None) -> Path | None:
     """A scan's ``.house`` file in either layout under ``root``, even without its mesh."""
     if root is None:
