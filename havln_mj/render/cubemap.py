@@ -1,5 +1,7 @@
-"""Cube maps in Matterport's skybox convention: which face and texel a direction falls on,
-sampling, and rendering the six faces of a view with MuJoCo.
+"""Cube maps in Matterport's skybox convention: lookup, sampling and rendering of the faces.
+
+Which face and texel a direction falls on, reading faces along directions, and rendering
+the six faces of a viewpoint with MuJoCo.
 
 Facts from Matterport3DSimulator (``NavGraph.cpp``, ``MatterSim.cpp``, its shaders):
 

@@ -1,5 +1,6 @@
-"""Skybox mode: a Matterport3D viewpoint's own photographs, as MatterSim renders them, with
-the people MuJoCo draws composited on top.
+"""Skybox mode: a viewpoint's Matterport3D photographs as MatterSim renders them, plus people.
+
+The people MuJoCo draws are composited on top.
 
 Users who hold Matterport3D's ``matterport_skybox_images`` get, at any heading and elevation,
 the image MatterSim would give (same pinhole camera, vertical field of view, upright rows
@@ -105,10 +106,13 @@ def load_skybox(folder: Path | str, viewpoint: str, face_size: int = 512) -> Sky
     if small.is_file():
         rgb = _strip(_read(small, cv2.IMREAD_COLOR), small)
     elif all(f.is_file() for f in faces):
+        size = (face_size, face_size)
         rgb = np.stack(
-            [cv2.resize(_read(f, cv2.IMREAD_COLOR), (face_size, face_size), interpolation=cv2.INTER_AREA)
-             for f in faces]
-        )  # fmt: skip
+            [
+                cv2.resize(_read(f, cv2.IMREAD_COLOR), size, interpolation=cv2.INTER_AREA)
+                for f in faces
+            ]
+        )
     else:
         missing = [str(f) for f in faces if not f.is_file()]
         raise MissingDataError(
@@ -161,7 +165,8 @@ def skybox_view(
     """
     if width < 1 or height < 1 or not 0.0 < vfov_deg < 180.0:
         raise InvalidArgumentError(
-            f"need width, height >= 1 and vfov in (0, 180) degrees; got {width}, {height}, {vfov_deg}"
+            "need width, height >= 1 and vfov in (0, 180) degrees; "
+            f"got {width}, {height}, {vfov_deg}"
         )
     rays = camera_rays(heading_xmat(heading, elevation), width, height, vfov_deg)
     return _sample_view(skybox, rotation, rays)

@@ -72,11 +72,20 @@ def made_up_scan(tmp_path, unlabelled_box: int = 0):
     verts, faces = boxes_to_triangles(boxes.lo, boxes.hi)
     objects = np.repeat(np.arange(len(boxes)), 12)
     objects[objects == unlabelled_box] = -1
-    write_ply(seg / f"{SCAN}.ply", verts, faces, {"face_material": objects, "face_segment": objects,
-                                                   "face_category": np.zeros(len(faces), int)})  # fmt: skip
+    fields = {
+        "face_material": objects,
+        "face_segment": objects,
+        "face_category": np.zeros(len(faces), int),
+    }
+    write_ply(seg / f"{SCAN}.ply", verts, faces, fields)
     kinds = list(CLASSES)
-    lines = ["ASCII 1.1", f"H {SCAN} house 0 0 0 0 0 {len(boxes)} {len(kinds)} 1 0 1 0 0 0 0 0 0 0 0 9 9 3 0 0 0 0 0",
-             "L 0 1 - 0 0 0 0 0 0 20 20 3 0 0 0 0 0", "R 0 0 0 0 l 0 0 0 0 0 0 20 20 3 2.7 0 0 0 0"]  # fmt: skip
+    counts = f"0 0 0 0 0 {len(boxes)} {len(kinds)} 1 0 1"
+    lines = [
+        "ASCII 1.1",
+        f"H {SCAN} house {counts} 0 0 0 0 0 0 0 0 9 9 3 0 0 0 0 0",
+        "L 0 1 - 0 0 0 0 0 0 20 20 3 0 0 0 0 0",
+        "R 0 0 0 0 l 0 0 0 0 0 0 20 20 3 2.7 0 0 0 0",
+    ]
     for k, kind in enumerate(kinds):
         lines.append(
             f"C {k} {k + 1} {kind} {mpcat40_index(CLASSES[kind])} {CLASSES[kind]} 0 0 0 0 0"
@@ -84,9 +93,8 @@ def made_up_scan(tmp_path, unlabelled_box: int = 0):
     for k, kind in enumerate(boxes.kind):
         c = (boxes.lo[k] + boxes.hi[k]) / 2
         r = (boxes.hi[k] - boxes.lo[k]) / 2
-        lines.append(
-            f"O {k} 0 {kinds.index(kind)} {c[0]} {c[1]} {c[2]} 1 0 0 0 1 0 {r[0]} {r[1]} {r[2]} 0 0 0 0 0 0 0 0"
-        )
+        where = f"{c[0]} {c[1]} {c[2]} 1 0 0 0 1 0 {r[0]} {r[1]} {r[2]}"
+        lines.append(f"O {k} 0 {kinds.index(kind)} {where} 0 0 0 0 0 0 0 0")
     (seg / f"{SCAN}.house").write_text("\n".join(lines) + "\n")
     conn = tmp_path / "connectivity"
     conn.mkdir()

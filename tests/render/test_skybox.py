@@ -168,8 +168,10 @@ def test_skybox_files_load_in_both_layouts(tmp_path):
     depth = np.full((S, 6 * S), int(2.5 * DEPTH_UNITS_PER_M), np.uint16)
     cv2.imwrite(str(tmp_path / "vp_skybox_depth_small.png"), depth)
     for k in range(6):
-        cv2.imwrite(str(tmp_path / f"other_skybox{k}_sami.jpg"), np.repeat(np.repeat(faces[k], 2, 0), 2, 1),
-                    [cv2.IMWRITE_JPEG_QUALITY, 100])  # fmt: skip
+        big = np.repeat(np.repeat(faces[k], 2, 0), 2, 1)
+        cv2.imwrite(
+            str(tmp_path / f"other_skybox{k}_sami.jpg"), big, [cv2.IMWRITE_JPEG_QUALITY, 100]
+        )
     small = load_skybox(tmp_path, "vp")
     big = load_skybox(tmp_path, "other", face_size=S)
     assert small.rgb.shape == big.rgb.shape == (6, S, S, 3)
@@ -231,9 +233,14 @@ def _room_with_a_person():
     )  # fmt: skip
     person = spec.worldbody.add_body(name="human0/pelvis", mocap=True, pos=[0.0, 3.5, 0.0])
     person.add_geom(
-        type=mujoco.mjtGeom.mjGEOM_CAPSULE, size=[0.3, 0.7], pos=[0, 0, 1.0], rgba=[0.9, 0.1, 0.1, 1],
-        group=groups.HUMANS, contype=0, conaffinity=0,
-    )  # fmt: skip
+        type=mujoco.mjtGeom.mjGEOM_CAPSULE,
+        size=[0.3, 0.7],
+        pos=[0, 0, 1.0],
+        rgba=[0.9, 0.1, 0.1, 1],
+        group=groups.HUMANS,
+        contype=0,
+        conaffinity=0,
+    )
     agent = spec.worldbody.add_body(name="agent", mocap=True, pos=[0.0, 0.0, 1.2])
     agent.add_camera(name=CAMERA)
     label_people(spec)
