@@ -49,50 +49,68 @@ direction along ``axis`` with ``sign``, the file face, and ``s = (sc/|ma| + 1)/2
 def lookup(directions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The file face (0..5) and ``(s, t)`` in [0, 1] of skybox-frame directions ``(..., 3)``.
 
-    ``s`` runs along a face image's columns, ``t`` down its rows (row 0 at ``t = 0``).
+    ``s`` runs along a face image's columns, ``t`` down its rows (row 0 at ``t = 0``). This
+    is :data:`GL_FACES` written out (ties go to x, then y, like ``argmax``).
     """
-    d = np.asarray(directions, dtype=np.float64)
-    axis = np.argmax(np.abs(d), axis=-1)
-    ma = np.take_along_axis(d, axis[..., None], axis=-1)[..., 0]
-    face = np.zeros(axis.shape, np.int64)
-    s, t = np.zeros(axis.shape), np.zeros(axis.shape)
-    for (ax, sign), (k, (sa, ss), (ta, ts)) in GL_FACES.items():
-        sel = (axis == ax) & (np.sign(ma) == sign)
-        face[sel] = k
-        s[sel] = (ss * d[..., sa][sel] / np.abs(ma[sel]) + 1.0) / 2.0
-        t[sel] = (ts * d[..., ta][sel] / np.abs(ma[sel]) + 1.0) / 2.0
-    return face, s, t
+    d = np.asarray(directions, dtype=np.float32)
+    x, y, z = d[..., 0], d[..., 1], d[..., 2]
+    ax, ay, az = np.abs(x), np.abs(y), np.abs(z)
+    on_x = (ax >= ay) & (ax >= az)
+    on_y = ~on_x & (ay >= az)
+    ma = np.where(on_x, ax, np.where(on_y, ay, az))
+    sc = np.where(on_x, -np.sign(x) * z, np.where(on_y, x, np.sign(z) * x))
+    tc = np.where(on_y, np.sign(y) * z, -y)
+    face = np.where(
+        on_x, np.where(x > 0, 2, 4), np.where(on_y, np.where(y > 0, 0, 5), np.where(z > 0, 1, 3))
+    )
+    half = 0.5 / ma
+    return face, sc * half + 0.5, tc * half + 0.5
+
+
+class CubeAtlas:
+    """Six faces ``(6, S, S[, C])`` stacked, each with a one-texel border copied from its edges.
+
+    One ``cv2.remap`` then samples them as OpenGL samples a cube map: bilinearly between
+    texel centres or from the nearest texel, clamped to each face's edge.
+
+    Channels: 1-4 of ``uint8``, ``uint16`` or ``float32`` (labels and ids as ``float32``).
+    """
+
+    def __init__(self, faces: np.ndarray) -> None:
+        self.size = faces.shape[1]
+        self.dtype = faces.dtype
+        padded = np.pad(faces, [(0, 0), (1, 1), (1, 1)] + [(0, 0)] * (faces.ndim - 3), mode="edge")
+        self.atlas = np.ascontiguousarray(padded.reshape(6 * (self.size + 2), *padded.shape[2:]))
+
+    def sample(self, face: np.ndarray, s: np.ndarray, t: np.ndarray, linear: bool) -> np.ndarray:
+        """Reads the faces at :func:`lookup` coordinates."""
+        import cv2
+
+        n = self.size
+        map_x = (s * n + 0.5).astype(np.float32)  # + 1 for the border, - 0.5 to texel centres
+        map_y = (t * n + 0.5 + face * (n + 2)).astype(np.float32)
+        if not linear:  # texel floor(s·n) has its centre at floor(s·n) + 1 in the atlas
+            map_x, map_y = np.floor(map_x + 0.5), np.floor(map_y + 0.5)
+        flag = cv2.INTER_LINEAR if linear else cv2.INTER_NEAREST
+        return cv2.remap(self.atlas, map_x, map_y, flag, borderMode=cv2.BORDER_REPLICATE)
 
 
 def sample(faces: np.ndarray, directions: np.ndarray, linear: bool = True) -> np.ndarray:
-    """Reads cube faces ``(6, S, S, ...)`` along skybox-frame directions ``(..., 3)``.
+    """Reads cube faces ``(6, S, S[, C])`` along skybox-frame directions ``(..., 3)``.
 
     ``linear`` filters bilinearly between texel centres (OpenGL's ``GL_LINEAR``), otherwise
-    takes the nearest texel (``GL_NEAREST``); both clamp to the face's edge.
+    takes the nearest texel (``GL_NEAREST``); both clamp to the face's edge. Integer labels
+    are read through ``float32``, exact below 2²⁴.
     """
-    face, s, t = lookup(directions)
-    size = faces.shape[1]
-    if not linear:
-        col = np.clip(np.floor(s * size).astype(np.int64), 0, size - 1)
-        row = np.clip(np.floor(t * size).astype(np.int64), 0, size - 1)
-        return faces[face, row, col]
-    x, y = s * size - 0.5, t * size - 0.5
-    x0, y0 = np.floor(x), np.floor(y)
-    fx, fy = x - x0, y - y0
-    c0, c1 = (np.clip(v, 0, size - 1).astype(np.int64) for v in (x0, x0 + 1))
-    r0, r1 = (np.clip(v, 0, size - 1).astype(np.int64) for v in (y0, y0 + 1))
-    data = faces.astype(np.float32)
-    extra = (None,) * (faces.ndim - 3)
-    fx, fy = fx[(..., *extra)], fy[(..., *extra)]
-    top = data[face, r0, c0] * (1 - fx) + data[face, r0, c1] * fx
-    bottom = data[face, r1, c0] * (1 - fx) + data[face, r1, c1] * fx
-    out = top * (1 - fy) + bottom * fy
-    return np.rint(out).astype(faces.dtype) if faces.dtype == np.uint8 else out.astype(faces.dtype)
+    integer = faces.dtype.kind in "iu" and faces.dtype not in (np.uint8, np.uint16)
+    atlas = CubeAtlas(faces.astype(np.float32) if integer else faces)
+    out = atlas.sample(*lookup(directions), linear=linear)
+    return np.rint(out).astype(faces.dtype) if integer else out
 
 
 def world_to_skybox(directions: np.ndarray, rotation: np.ndarray) -> np.ndarray:
     """Skybox-frame directions ``-Rᵀ w`` of world directions ``w`` (see the module docstring)."""
-    return -np.asarray(directions) @ np.asarray(rotation, dtype=np.float64)
+    return -np.asarray(directions) @ np.asarray(rotation, dtype=np.float32)
 
 
 def camera_rays(xmat: np.ndarray, width: int, height: int, vfov_deg: float) -> np.ndarray:
@@ -102,11 +120,23 @@ def camera_rays(xmat: np.ndarray, width: int, height: int, vfov_deg: float) -> n
     row 0 is the top of the image, column 0 its left. The z component along the view axis
     is 1, so a distance along a ray is a planar depth.
     """
+    x, y = _pixel_tangents(width, height, vfov_deg)
+    cam = np.stack(np.broadcast_arrays(x[None, :], y[:, None], np.float32(-1.0)), axis=-1)
+    return cam @ np.asarray(xmat, dtype=np.float32).reshape(3, 3).T
+
+
+def _pixel_tangents(width: int, height: int, vfov_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """Tangents of the pixel centres' angles right of and above the view axis."""
     t = np.tan(np.radians(vfov_deg) / 2.0)
     x = (2.0 * (np.arange(width) + 0.5) / width - 1.0) * t * width / height
     y = (1.0 - 2.0 * (np.arange(height) + 0.5) / height) * t
-    cam = np.stack(np.broadcast_arrays(x[None, :], y[:, None], -1.0), axis=-1)
-    return cam @ np.asarray(xmat, dtype=np.float64).reshape(3, 3).T
+    return x.astype(np.float32), y.astype(np.float32)
+
+
+def ray_lengths(width: int, height: int, vfov_deg: float) -> np.ndarray:
+    """Lengths ``(H, W)`` of :func:`camera_rays` (distance / planar depth of each pixel)."""
+    x, y = _pixel_tangents(width, height, vfov_deg)
+    return np.sqrt(1.0 + x[None, :] ** 2 + y[:, None] ** 2)
 
 
 def heading_xmat(heading: float, elevation: float) -> np.ndarray:

@@ -22,7 +22,7 @@ import numpy as np
 
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.render.camera import Camera
-from havln_mj.render.cubemap import render_faces, sample, world_to_skybox
+from havln_mj.render.cubemap import CubeAtlas, lookup, render_faces, world_to_skybox
 from havln_mj.render.labels import geom_labels, segmentation_groups
 
 
@@ -79,17 +79,19 @@ def render_panorama(
         raise InvalidArgumentError(f"panorama height must be a positive int, got {height!r}")
     groups = segmentation_groups(model) if labels else None
     faces = render_faces(model, data, camera, np.asarray(position, float), None, groups)
-    rays = world_to_skybox(panorama_directions(height, heading), np.eye(3))
+    where = lookup(world_to_skybox(panorama_directions(height, heading), np.eye(3)))
     semantic = instance = None
     if faces.geom_ids is not None:
-        ids = sample(faces.geom_ids, rays, linear=False)
+        ids = np.rint(CubeAtlas(faces.geom_ids.astype(np.float32)).sample(*where, False)).astype(
+            int
+        )
         sem, inst = geom_labels(model)
         hit = ids >= 0
         semantic = np.where(hit, sem[np.maximum(ids, 0)], 0).astype(np.uint8)
         instance = np.where(hit, inst[np.maximum(ids, 0)], 0).astype(np.int32)
     return Panorama(
-        sample(faces.rgb, rays, linear=True),
-        sample(faces.depth, rays, linear=False),
+        CubeAtlas(faces.rgb).sample(*where, linear=True),
+        CubeAtlas(faces.depth).sample(*where, linear=False),
         semantic,
         instance,
         float(heading),

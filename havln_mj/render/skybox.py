@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import mujoco
@@ -33,7 +34,14 @@ import numpy as np
 from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError, MissingDataError
 from havln_mj.render.camera import Camera
-from havln_mj.render.cubemap import camera_rays, heading_xmat, sample, world_to_skybox
+from havln_mj.render.cubemap import (
+    CubeAtlas,
+    camera_rays,
+    heading_xmat,
+    lookup,
+    ray_lengths,
+    world_to_skybox,
+)
 from havln_mj.render.labels import segmentation_groups
 from havln_mj.scene.matterport.layout import skybox_folders
 
@@ -53,6 +61,16 @@ class Skybox:
 
     rgb: np.ndarray
     depth: np.ndarray | None
+
+    @cached_property
+    def rgb_atlas(self) -> CubeAtlas:
+        """The colour faces ready for sampling."""
+        return CubeAtlas(self.rgb)
+
+    @cached_property
+    def depth_atlas(self) -> CubeAtlas | None:
+        """The depth faces ready for sampling (None without depth)."""
+        return None if self.depth is None else CubeAtlas(self.depth)
 
 
 @dataclass(frozen=True)
@@ -168,19 +186,19 @@ def skybox_view(
             "need width, height >= 1 and vfov in (0, 180) degrees; "
             f"got {width}, {height}, {vfov_deg}"
         )
-    rays = camera_rays(heading_xmat(heading, elevation), width, height, vfov_deg)
-    return _sample_view(skybox, rotation, rays)
+    return _sample_view(skybox, rotation, heading_xmat(heading, elevation), width, height, vfov_deg)
 
 
 def _sample_view(
-    skybox: Skybox, rotation: np.ndarray, rays: np.ndarray
+    skybox: Skybox, rotation: np.ndarray, xmat: np.ndarray, width: int, height: int, vfov: float
 ) -> tuple[np.ndarray, np.ndarray | None]:
-    local = world_to_skybox(rays, rotation)
-    rgb = sample(skybox.rgb, local, linear=True)
-    if skybox.depth is None:
+    """The skybox through a pinhole camera of orientation ``xmat``: RGB and planar depth."""
+    where = lookup(world_to_skybox(camera_rays(xmat, width, height, vfov), rotation))
+    rgb = skybox.rgb_atlas.sample(*where, linear=True)
+    if skybox.depth_atlas is None:
         return rgb, None
-    # Euclidean to planar: the rays' component along the view axis is 1.
-    return rgb, sample(skybox.depth, local, linear=False) / np.linalg.norm(rays, axis=-1)
+    # Euclidean to planar depth.
+    return rgb, skybox.depth_atlas.sample(*where, linear=False) / ray_lengths(width, height, vfov)
 
 
 def composite(
@@ -216,8 +234,9 @@ def render_skybox_frame(
     ids = camera.render_geom_ids(data, geom_groups=segmentation_groups(model))
     people = (ids >= 0) & (model.geom_group[np.maximum(ids, 0)] == groups.HUMANS)
     xmat = data.cam_xmat[camera.camera_id]
-    rays = camera_rays(xmat, camera.width, camera.height, camera.vfov)
-    background, background_depth = _sample_view(skybox, rotation, rays)
+    background, background_depth = _sample_view(
+        skybox, rotation, xmat, camera.width, camera.height, camera.vfov
+    )
     assert frame.rgb is not None and frame.depth is not None
     return composite(background, background_depth, frame.rgb, frame.depth, people)
 
