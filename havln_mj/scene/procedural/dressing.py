@@ -283,7 +283,7 @@ def _pictures(r: _Room, palette: Palette, frame: Material) -> None:
             if not side.free(a - 0.2, b + 0.2) or bottom + h > r.height - 0.25:
                 continue
             side.used.append((a - 0.2, b + 0.2))
-            art = palette.image(f"art{int(rng.integers(4))}", lambda: tx.art(rng, 256), shine=0.2)
+            art = palette.image(f"art{int(rng.integers(4))}", "art", 256, shine=0.2)
             iid = r.d.instance("picture", "picture", r.room.index)
             r.d.add(iid, frame, side.slab(a, b, 0.0, 0.03, bottom, bottom + h))
             r.d.add(
@@ -313,7 +313,7 @@ def _rug(r: _Room, palette: Palette) -> None:
         return
     colours = palette.pick(palette.lib["rugs"])
     k = int(rng.integers(3))
-    image = palette.image(f"rug{k}", lambda: tx.rug(rng, 256, *colours))
+    image = palette.image(f"rug{k}", "rug", 256, *colours)
     solid = box([lo[0], lo[1], 0.0], [hi[0], hi[1], 0.008])
     uv = (solid.vertices[:, :2] - lo) / (hi - lo)
     iid = r.d.instance("rug", "floor", room.index)
@@ -325,10 +325,10 @@ def dress_rooms(dresser: Dresser, house: ProceduralHouse) -> None:
     p = dresser.palette
     trim = p.plain("trim", p.pick(p.lib["trim"]), 0.3)
     frame = p.plain("picture frame", (0.12, 0.1, 0.09), 0.3)
-    shade = p.decal("shade", lambda: tx.shade_ramp(64, 0.4))
-    contact = p.decal("contact shadow", lambda: tx.soft_patch(64, (0.0, 0.0, 0.0), 0.55))
-    sun = p.decal("daylight", lambda: tx.soft_patch(64, (1.0, 0.96, 0.86), 0.3), emission=1.0)
-    sky = p.image("sky", lambda: tx.sky(p.rng, 256), emission=0.9)
+    shade = p.decal("shade", tx.shade_ramp(64, 0.4))
+    contact = p.decal("contact shadow", tx.soft_patch(64, (0.0, 0.0, 0.0), 0.55))
+    sun = p.decal("daylight", tx.soft_patch(64, (1.0, 0.96, 0.86), 0.3), emission=1.0)
+    sky = p.image("sky", "sky", 256, emission=0.9)
     frosted = p.plain("frosted glass", (0.9, 0.94, 0.96), emission=0.85)
     rooms = [_Room(house, dresser, room) for room in house.plan.rooms]
     _doors(house, dresser, rooms, trim)

@@ -15,7 +15,6 @@ from typing import Any
 
 import numpy as np
 
-from havln_mj.scene.procedural import textures as tx
 from havln_mj.scene.procedural.materials import Material, Palette
 from havln_mj.scene.procedural.primitives import (
     Solid,
@@ -82,7 +81,7 @@ def _shelves(p: Palette, name: str, w: float, d: float, h: float, room: int) -> 
         (None, wood, box([-hw, hd - 0.015, 0.0], [hw, hd, h])),
     ]
     levels = np.linspace(0.04, h - 0.025, max(3, int(h / 0.36)))
-    books = p.image("books", lambda: tx.books(p.rng, 256))
+    books = p.image("books", "books", 256)
     boxes = p.fabric(f"boxes{room}")
     for z in levels:
         out.append((None, wood, box([-hw, -hd, z - 0.025], [hw, hd, z])))
@@ -105,7 +104,7 @@ def _shelves(p: Palette, name: str, w: float, d: float, h: float, room: int) -> 
 def _plant(p: Palette, w: float, d: float, h: float) -> list[Piece]:
     r = min(w, d) / 2
     pot = p.plain(f"pot{int(p.rng.integers(3))}", p.lib["pots"][int(p.rng.integers(3))], 0.3)
-    foliage = p.image("leaves", lambda: tx.leaves(p.rng, 128))
+    foliage = p.image("leaves", "leaves", 128)
     out: list[Piece] = [
         (None, pot, frustum(0.6 * r, 0.85 * r, 0.0, 0.3 * h)),
         (

@@ -10,8 +10,9 @@ uses them; a material's colour tints its texture.
 from __future__ import annotations
 
 import json
+import zlib
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -90,11 +91,14 @@ class Palette:
         c = np.clip(np.asarray(colour[:3], float) * self.rng.uniform(1 - amount, 1 + amount), 0, 1)
         return (float(c[0]), float(c[1]), float(c[2]))
 
-    def texture(self, key: str, make: Any) -> str:
-        """Registers the texture ``key``, drawing it with ``make()`` the first time."""
+    def texture(self, key: str, kind: str, size: int, *args: Any, variants: int = 3) -> str:
+        """Registers texture ``key``: one of ``variants`` images of ``kind`` with ``args``.
+
+        The house picks the variant; images are drawn once per process (see :func:`image`).
+        """
         if key not in self.textures:
-            image = make()
-            self.textures[key] = image if image.dtype == np.uint8 else tx.to_uint8(image)
+            variant = int(self.rng.integers(variants))
+            self.textures[key] = image(kind, size, _frozen(args), variant)
         return key
 
     def add(self, material: Material) -> Material:
@@ -110,23 +114,19 @@ class Palette:
     def _surface(self, name: str, spec: dict[str, Any], colour: Any, size: int) -> Material:
         """A tiled surface material from a library entry (floors and walls)."""
         kind = spec["texture"]
-        rng = self.rng
-        if kind in ("planks", "parquet"):
-            key = self.texture(name, lambda: tx.GENERATORS[kind](rng, size, (1.0, 1.0, 1.0)))
-        elif kind == "tiles":
-            args = {k: spec[k] for k in ("count", "layout", "alternate", "grout") if k in spec}
-            key = self.texture(name, lambda: tx.tiles(rng, size, spec["colour"], **args))
-            colour = (1.0, 1.0, 1.0)
-        elif kind == "wallpaper":
-            accent = np.asarray(colour) * rng.uniform(0.78, 0.9)
-            key = self.texture(
-                name, lambda: tx.wallpaper(rng, size, colour, accent, spec["pattern"])
-            )
-            colour = (1.0, 1.0, 1.0)
-        elif kind == "paint":  # matt paint: a plain colour (texturing it costs frame rate)
+        if kind == "paint":  # matt paint: a plain colour (texturing it costs frame rate)
             return self.plain(name, colour, float(spec.get("shine", 0.0)))
+        if kind in ("planks", "parquet"):
+            key = self.texture(f"{kind}/{name}", kind, size)
+        elif kind == "tiles":
+            own = "colour" in spec  # floor tiles have their colours, wall tiles take the paint
+            args = [spec.get(k) for k in ("count", "layout", "alternate", "grout")]
+            key = self.texture(f"tiles/{name}", kind, size, spec.get("colour", (1, 1, 1)), *args)
+            colour = (1.0, 1.0, 1.0) if own else colour
+        elif kind == "wallpaper":
+            key = self.texture(f"wallpaper/{spec['pattern']}", kind, size, spec["pattern"])
         else:  # greyscale textures tinted by the colour
-            key = self.texture(kind, lambda: tx.GENERATORS[kind](rng, size))
+            key = self.texture(kind, kind, size)
         return self.add(
             Material(
                 name,
@@ -169,7 +169,7 @@ class Palette:
     def wood(self, key: str = "wood") -> Material:
         """A wood finish (per key: one per piece of furniture or per house element)."""
         colour = self._jitter(self.pick(self.lib["woods"]))
-        grain = self.texture("wood", lambda: tx.wood(self.rng, TEXTURE))
+        grain = self.texture("wood", "wood", TEXTURE)
         return self.add(Material(f"wood/{key}", _rgba(colour), grain, 0.8, 0.3))
 
     def painted(self, key: str) -> Material:
@@ -180,18 +180,18 @@ class Palette:
     def fabric(self, key: str, colours: str = "fabrics") -> Material:
         """Upholstery (``colours`` = ``"fabrics"``) or bed linen (``"bedding"``)."""
         colour = self._jitter(self.pick(self.lib[colours]))
-        weave = self.texture("fabric", lambda: tx.fabric(self.rng, TEXTURE))
+        weave = self.texture("fabric", "fabric", TEXTURE)
         return self.add(Material(f"{colours}/{key}", _rgba(colour), weave, 0.35))
 
     def accent(self, key: str) -> Material:
         """A bright cushion or throw colour."""
-        weave = self.texture("fabric", lambda: tx.fabric(self.rng, TEXTURE))
+        weave = self.texture("fabric", "fabric", TEXTURE)
         colour = self._jitter(self.pick(self.lib["accents"]))
         return self.add(Material(f"accent/{key}", _rgba(colour), weave, 0.35))
 
     def metal(self, name: str) -> Material:
         """Brushed ``steel``, ``black`` or ``brass`` metal."""
-        streaks = self.texture("brushed", lambda: tx.brushed(self.rng, TEXTURE))
+        streaks = self.texture("brushed", "brushed", TEXTURE)
         return self.add(
             Material(f"metal/{name}", _rgba(self.lib["metals"][name]), streaks, 0.5, 0.6)
         )
@@ -199,19 +199,42 @@ class Palette:
     def stone(self, key: str) -> Material:
         """A stone worktop."""
         ground, vein = self.pick(self.lib["stones"])
-        image = self.texture(f"stone/{key}", lambda: tx.marble(self.rng, TEXTURE, ground, vein))
-        return self.add(Material(f"stone/{key}", (1.0, 1.0, 1.0, 1.0), image, 1.0, 0.5))
+        stone = self.texture(f"stone/{key}", "marble", TEXTURE, ground, vein)
+        return self.add(Material(f"stone/{key}", (1.0, 1.0, 1.0, 1.0), stone, 1.0, 0.5))
 
     def ceramic(self) -> Material:
         """Glazed white ceramic (toilets, basins, baths)."""
         return self.plain("ceramic", (0.95, 0.95, 0.96), shine=0.8)
 
-    def image(self, key: str, make: Any, emission: float = 0.0, shine: float = 0.0) -> Material:
+    def image(
+        self, key: str, kind: str, size: int, *args: Any, emission: float = 0.0, shine: float = 0.0
+    ) -> Material:
         """A material showing one whole generated image (pictures, rugs, books, sky)."""
-        self.texture(key, make)
+        self.texture(key, kind, size, *args, variants=4)
         return self.add(Material(key, (1.0, 1.0, 1.0, 1.0), key, 0.0, shine, emission))
 
-    def decal(self, key: str, make: Any, emission: float = 0.0) -> Material:
+    def decal(self, key: str, overlay: np.ndarray, emission: float = 0.0) -> Material:
         """A blended RGBA overlay (corner shading, contact shadows, patches of daylight)."""
-        self.texture(key, make)
+        self.textures.setdefault(key, overlay)
         return self.add(Material(key, (1.0, 1.0, 1.0, 0.99), key, 0.0, emission=emission))
+
+
+def _frozen(args: Any) -> Any:
+    """Lists as tuples, recursively, so texture arguments can key a cache."""
+    if isinstance(args, list | tuple):
+        return tuple(_frozen(a) for a in args)
+    return args
+
+
+@lru_cache(maxsize=48)
+def image(kind: str, size: int, args: tuple, variant: int) -> np.ndarray:
+    """Variant ``variant`` of a texture: the same pixels for the same arguments, every time.
+
+    Its generator is seeded from the arguments, not from a house, so houses share images and
+    a process draws each one once (about 20 MB are kept).
+    """
+    seed = zlib.crc32(repr((kind, size, args)).encode())
+    rng = np.random.default_rng([seed, variant])
+    out = tx.to_uint8(tx.GENERATORS[kind](rng, size, *args))
+    out.flags.writeable = False
+    return out

@@ -75,8 +75,11 @@ def wood(rng: np.random.Generator, size: int) -> Image:
     return _rgb(0.84 + 0.08 * bands**2 + 0.08 * streaks)
 
 
-def planks(rng: np.random.Generator, size: int, colour: tuple, boards: int = 6) -> Image:
-    """Floorboards along x: ``boards`` rows, staggered end joints, per-board tone, dark seams."""
+def planks(rng: np.random.Generator, size: int, boards: int = 6) -> Image:
+    """Floorboards along x (grey, to be tinted).
+
+    ``boards`` rows, staggered end joints, a tone per board, dark seams.
+    """
     grain = _grain(rng, size, rings=boards * 3.0)
     u, v = _grid(size)
     row = np.minimum((v * boards).astype(int), boards - 1)
@@ -86,12 +89,14 @@ def planks(rng: np.random.Generator, size: int, colour: tuple, boards: int = 6) 
     seam = (np.abs((v * boards + 0.5) % 1.0 - 0.5) < 0.012 * boards) | (
         np.abs(((u - joints[row]) % 0.5) - 0.25) > 0.247
     )
-    grey = grain * tone * np.where(seam, 0.55, 1.0)
-    return _rgb(grey, colour)
+    return _rgb(grain * tone * np.where(seam, 0.55, 1.0))
 
 
-def parquet(rng: np.random.Generator, size: int, colour: tuple, blocks: int = 4) -> Image:
-    """Basket-weave parquet: ``blocks`` × ``blocks`` squares of three slats, alternating."""
+def parquet(rng: np.random.Generator, size: int, blocks: int = 4) -> Image:
+    """Basket-weave parquet (grey, to be tinted).
+
+    ``blocks`` × ``blocks`` squares of three slats, turned a quarter from square to square.
+    """
     cell = size // blocks
     along = _grain(rng, cell * 1, rings=9.0)
     u, v = np.meshgrid(np.arange(cell), np.arange(cell))
@@ -107,23 +112,26 @@ def parquet(rng: np.random.Generator, size: int, colour: tuple, blocks: int = 4)
             grey[i * cell : (i + 1) * cell, j * cell : (j + 1) * cell] = (
                 g * tone * np.where(seam | edge, 0.6, 1.0)
             )
-    return _rgb(grey, colour)
+    return _rgb(grey)
 
 
 def tiles(
     rng: np.random.Generator,
     size: int,
     colour: tuple,
-    count: int = 4,
-    layout: str = "grid",
+    count: int | None = None,
+    layout: str | None = None,
     alternate: tuple | None = None,
-    grout: tuple = (0.78, 0.77, 0.74),
+    grout: tuple | None = None,
 ) -> Image:
-    """Ceramic tiles: ``count`` per side in a grid, running bond ("brick") or checkerboard.
+    """Ceramic tiles, ``count`` (4) per side.
 
-    Each tile gets a slight tone of its own and a darker bevel at its edges; grout lines
+    Laid in a ``"grid"``, running bond (``"brick"``) or ``"checker"`` (with an ``alternate``
+    colour). Each tile gets a slight tone of its own and a darker bevel at its edges; grout lines
     are about 1/40 of a tile wide.
     """
+    count, layout = count or 4, layout or "grid"
+    grout = grout or (0.78, 0.77, 0.74)
     u, v = _grid(size)
     rows = count * (2 if layout == "brick" else 1)
     y = v * rows
@@ -156,10 +164,8 @@ def paint(rng: np.random.Generator, size: int) -> Image:
     return _rgb(grey)
 
 
-def wallpaper(
-    rng: np.random.Generator, size: int, colour: tuple, accent: tuple, pattern: str
-) -> Image:
-    """Wallpaper: two-tone ``"stripes"`` or a ``"lattice"`` of small diamonds, on paper grain."""
+def wallpaper(rng: np.random.Generator, size: int, pattern: str) -> Image:
+    """Wallpaper (grey, to be tinted): ``"stripes"`` or a ``"lattice"`` of small diamonds."""
     u, v = _grid(size)
     if pattern == "stripes":
         mask = np.abs(((u * 8) % 1.0) - 0.5) < 0.18
@@ -167,8 +173,7 @@ def wallpaper(
         d = np.abs(((u * 6) % 1.0) - 0.5) + np.abs(((v * 6) % 1.0) - 0.5)
         mask = (d < 0.16) | (np.abs(d - 0.5) < 0.02)
     paper = 0.95 + 0.05 * noise(rng, size, size / 5.0)
-    out = np.where(mask[..., None], np.asarray(accent[:3]), np.asarray(colour[:3]))
-    return np.clip(out * paper[..., None], 0.0, 1.0).astype(np.float32)
+    return _rgb(np.where(mask, 0.84, 1.0) * paper)
 
 
 def fabric(rng: np.random.Generator, size: int, threads: int = 48) -> Image:
