@@ -89,7 +89,8 @@ class Instance:
         category: Its own category name (e.g. ``"sofa cushion"``, ``"skirting"``).
         mpcat40: Its mpcat40 class index.
         region: Index of its region, or -1.
-        object: Index of the matching ``regions.json`` object (furniture), or None.
+        object: Index of the ``regions.json`` object (a piece of furniture) it is or is part
+            of (a sofa's cushion, a shelf's books), or None.
     """
 
     id: int

@@ -59,16 +59,17 @@ def _case(p: Palette, key: str, w: float, d: float, h: float, cols: int, rows: i
           plinth: float = 0.08) -> list[Piece]:  # fmt: skip
     """A carcass on a recessed plinth with a grid of fronts and handles (cabinets, drawers)."""
     hw, hd = w / 2, d / 2
+    fy = -hd + 0.03  # the carcass face: fronts and handles stand in front of it, inside d
     body, front = p.wood(key), p.painted(key)
     return [
-        (None, body, box([-hw, -hd, plinth], [hw, hd, h])),
+        (None, body, box([-hw, fy, plinth], [hw, hd, h])),
         (
             None,
             p.metal("black"),
-            box([-hw + 0.04, -hd + 0.05, 0.0], [hw - 0.04, hd - 0.02, plinth]),
+            box([-hw + 0.04, fy + 0.04, 0.0], [hw - 0.04, hd - 0.02, plinth]),
         ),
-        (None, front, _fronts(-hw, hw, plinth, h - 0.02, -hd, cols, rows)),
-        (None, p.metal("steel"), _knobs(-hw, hw, plinth, h - 0.02, -hd, cols, rows)),
+        (None, front, _fronts(-hw, hw, plinth, h - 0.02, fy, cols, rows)),
+        (None, p.metal("steel"), _knobs(-hw, hw, plinth, h - 0.02, fy, cols, rows)),
     ]
 
 
@@ -157,22 +158,23 @@ def _appliance(p: Palette, name: str, w: float, d: float, h: float) -> list[Piec
         p.metal("black"),
     )
     shell = steel if name == "fridge" else white
-    out: list[Piece] = [(None, shell, rounded_box([-hw, -hd, 0.02], [hw, hd, h], 0.02))]
+    fy = -hd + 0.04  # the front: doors, handles and dials stand in front of it, inside d
+    out: list[Piece] = [(None, shell, rounded_box([-hw, fy, 0.02], [hw, hd, h], 0.02))]
     out.append((None, black, box([-hw + 0.03, -hd + 0.03, 0.0], [hw - 0.03, hd - 0.03, 0.02])))
     if name == "fridge":
         out.append(
-            (None, black, box([-hw + 0.01, -hd - 0.002, 0.62 * h], [hw - 0.01, -hd, 0.63 * h]))
+            (None, black, box([-hw + 0.01, fy - 0.002, 0.62 * h], [hw - 0.01, fy, 0.63 * h]))
         )
         for z0, z1 in ((0.66 * h, 0.8 * h), (0.35 * h, 0.58 * h)):
-            out.append((None, steel, box([-hw + 0.05, -hd - 0.04, z0], [-hw + 0.07, -hd, z1])))
+            out.append((None, steel, box([-hw + 0.05, fy - 0.04, z0], [-hw + 0.07, fy, z1])))
     elif name == "stove":
         glass = p.plain("oven glass", (0.06, 0.06, 0.07), 0.8)
-        out.append((None, glass, box([-hw + 0.06, -hd - 0.004, 0.12], [hw - 0.06, -hd, h - 0.2])))
+        out.append((None, glass, box([-hw + 0.06, fy - 0.004, 0.12], [hw - 0.06, fy, h - 0.2])))
         out.append(
             (
                 None,
                 steel,
-                box([-hw + 0.08, -hd - 0.04, h - 0.17], [hw - 0.08, -hd - 0.01, h - 0.15]),
+                box([-hw + 0.08, fy - 0.04, h - 0.17], [hw - 0.08, fy - 0.01, h - 0.15]),
             )
         )
         out.append(
@@ -184,12 +186,12 @@ def _appliance(p: Palette, name: str, w: float, d: float, h: float) -> list[Piec
                 out.append((None, black, ring.moved(_I, [sx * hw / 2, sy * hd / 2.2, 0])))
     else:  # washer / dryer: a round door and a control strip
         glass = p.plain("porthole", (0.25, 0.3, 0.35), 0.8)
-        door = cylinder(0.2, -0.005, 0.015, 20).moved(_ALONG_Y, [0, -hd, 0.42])
+        door = cylinder(0.2, -0.005, 0.015, 20).moved(_ALONG_Y, [0, fy, 0.42])
         out.append((None, p.plain("door ring", (0.7, 0.71, 0.73), 0.5), door))
-        inner = cylinder(0.15, 0.0, 0.02, 20).moved(_ALONG_Y, [0, -hd - 0.004, 0.42])
+        inner = cylinder(0.15, 0.0, 0.02, 20).moved(_ALONG_Y, [0, fy - 0.004, 0.42])
         out.append((None, glass, inner))
         out.append(
-            (None, black, box([-hw + 0.04, -hd - 0.004, h - 0.14], [hw - 0.04, -hd, h - 0.04]))
+            (None, black, box([-hw + 0.04, fy - 0.004, h - 0.14], [hw - 0.04, fy, h - 0.04]))
         )
     return out
 
@@ -268,7 +270,7 @@ def _rack(p: Palette, w: float, d: float, h: float, room: int) -> list[Piece]:
         hook = box([0.0, -0.01, h - 0.12], [0.12, 0.01, h - 0.1])
         rot = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
         out.append((None, wood, hook.moved(rot, [0, 0, 0])))
-    coat = ellipsoid([0.16, 0.12, 0.4], 10, 6).moved(_I, [0.1, 0.0, h - 0.55])
+    coat = ellipsoid([0.15, 0.12, 0.4], 10, 6).moved(_I, [0.04, 0.0, h - 0.55])
     out.append((("clothes", 0), p.fabric(f"coat{room}"), coat))
     return out
 

@@ -329,6 +329,6 @@ def draw_item(dresser: Any, item: Item, index: int, spec: dict[str, Any]) -> Non
         iid = main
         if sub is not None:
             if sub not in subs:
-                subs[sub] = dresser.instance(sub[0], SUB_CLASSES[sub[0]], item.room)
+                subs[sub] = dresser.instance(sub[0], SUB_CLASSES[sub[0]], item.room, index)
             iid = subs[sub]
         dresser.add(iid, material, solid.moved(turn, centre))
