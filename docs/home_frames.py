@@ -75,26 +75,9 @@ def _shoot(scan, model, data, views, caption: bool = True) -> list[np.ndarray]:
             image = np.ascontiguousarray(cam.render(data).rgb[..., ::-1])
             if caption:
                 text = f"{scan.scene_id}, {name}"
-                cv2.putText(
-                    image,
-                    text,
-                    (8, H - 10),
-                    cv2.FONT_HERSHEY_SIMPLEX,
-                    0.45,
-                    (0, 0, 0),
-                    3,
-                    cv2.LINE_AA,
-                )
-                cv2.putText(
-                    image,
-                    text,
-                    (8, H - 10),
-                    cv2.FONT_HERSHEY_SIMPLEX,
-                    0.45,
-                    (255, 255, 255),
-                    1,
-                    cv2.LINE_AA,
-                )
+                for colour, weight in (((0, 0, 0), 3), ((255, 255, 255), 1)):  # outlined
+                    font = cv2.FONT_HERSHEY_SIMPLEX
+                    cv2.putText(image, text, (8, H - 10), font, 0.45, colour, weight, cv2.LINE_AA)
             out.append(image)
     return out
 

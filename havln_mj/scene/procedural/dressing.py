@@ -12,19 +12,16 @@ so the segmentation still sees a floor, a wall or a ceiling there.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from havln_mj.scene.procedural import textures as tx
+from havln_mj.scene.procedural.dresser import Dresser
 from havln_mj.scene.procedural.furnish import inner_rect
+from havln_mj.scene.procedural.house import ProceduralHouse
 from havln_mj.scene.procedural.layout import Door, Room
 from havln_mj.scene.procedural.materials import Material, Palette
 from havln_mj.scene.procedural.primitives import Solid, box, cylinder, frustum, quad
-
-if TYPE_CHECKING:
-    from havln_mj.scene.procedural.generate import ProceduralHouse
-    from havln_mj.scene.procedural.look import Dresser
 
 _NO_WINDOWS = {"c", "u", "h"}
 _FROSTED = {"a", "t"}

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from havln_mj.scene.procedural import fittings
+from havln_mj.scene.procedural.dresser import Dresser
 from havln_mj.scene.procedural.furnish import Item
 from havln_mj.scene.procedural.materials import Material, Palette
 from havln_mj.scene.procedural.primitives import (
@@ -318,7 +319,7 @@ def item_pieces(palette: Palette, item: Item, spec: dict[str, Any]) -> list[Piec
     return fittings.block_pieces(palette, item.name, w, d, h, spec, item.room)
 
 
-def draw_item(dresser: Any, item: Item, index: int, spec: dict[str, Any]) -> None:
+def draw_item(dresser: Dresser, item: Item, index: int, spec: dict[str, Any]) -> None:
     """Draws ``item`` (object ``index`` of the house) into ``dresser`` where it stands."""
     bbox = item.bbox
     centre = np.array([(bbox[0] + bbox[3]) / 2, (bbox[1] + bbox[4]) / 2, 0.0])

@@ -2,57 +2,27 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from havln_mj.cache import atomic_write_json
 from havln_mj.errors import InvalidArgumentError
-from havln_mj.scene.boxes import BoxSet
 from havln_mj.scene.connectivity import Connectivity, write_connectivity
 from havln_mj.scene.matterport.categories import SEMANTICS
 from havln_mj.scene.mesh import write_glb
 from havln_mj.scene.procedural.build import house_boxes
 from havln_mj.scene.procedural.furnish import Item, door_keepouts, furnish_room, inner_rect
-from havln_mj.scene.procedural.layout import FloorPlan, plan_house
+from havln_mj.scene.procedural.house import ProceduralHouse
+from havln_mj.scene.procedural.layout import plan_house
 from havln_mj.scene.procedural.look import dress_house
 from havln_mj.scene.procedural.recipe import Recipe, load_recipe
-from havln_mj.scene.procedural.viewpoints import (
-    ViewpointGraph,
-    place_viewpoints,
-    room_is_passable,
-)
+from havln_mj.scene.procedural.viewpoints import place_viewpoints, room_is_passable
 from havln_mj.scene.regions import Level, Region, Regions, SceneObject
 from havln_mj.scene.scanfolder import BOXES, CONNECTIVITY, MESH_GLB, META, REGIONS
 
 # Bump when generator code changes what a seed produces: cached scans are rebuilt.
 GENERATOR_VERSION = 2
-
-
-@dataclass(frozen=True)
-class ProceduralHouse:
-    """Everything a seed produces, before it is written to disk."""
-
-    scene_id: str
-    seed: int
-    plan: FloorPlan
-    items: tuple[Item, ...]
-    boxes: BoxSet
-    viewpoints: ViewpointGraph
-    connectivity: Connectivity
-    regions: Regions
-    recipe: Recipe
-
-    @property
-    def recipe_digest(self) -> str:
-        """The digest of the recipe the house was drawn from."""
-        return self.recipe.digest
-
-    @property
-    def area(self) -> float:
-        """Floor area in m²."""
-        return self.plan.width * self.plan.depth
 
 
 def _camera_pose(position: np.ndarray) -> np.ndarray:

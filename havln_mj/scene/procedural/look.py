@@ -13,68 +13,19 @@ changes its plan, furniture, viewpoints or graph.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 
-from havln_mj.scene.matterport.categories import Instance, SceneLabels, mpcat40_index
+from havln_mj.scene.matterport.categories import SceneLabels
 from havln_mj.scene.mesh import MeshPart
 from havln_mj.scene.procedural.build import SLAB, room_walls
-from havln_mj.scene.procedural.materials import Material, Palette
-from havln_mj.scene.procedural.primitives import Solid, box, merge
-
-if TYPE_CHECKING:
-    from havln_mj.scene.procedural.generate import ProceduralHouse
+from havln_mj.scene.procedural.dresser import Dresser
+from havln_mj.scene.procedural.dressing import dress_rooms
+from havln_mj.scene.procedural.furniture import draw_item
+from havln_mj.scene.procedural.house import ProceduralHouse
+from havln_mj.scene.procedural.materials import Palette
+from havln_mj.scene.procedural.primitives import box
 
 LOOK_SALT = 0x100C  # the look generator's seed is (house salt, seed, LOOK_SALT)
-
-
-class Dresser:
-    """Collects a house's triangles by (instance, material) and its instances' labels."""
-
-    def __init__(self, palette: Palette) -> None:
-        self.palette = palette
-        self.instances: list[Instance] = []
-        self._pieces: dict[tuple[int, str], list[Solid]] = {}
-
-    def instance(
-        self, category: str, mpcat40: str, region: int = -1, obj: int | None = None
-    ) -> int:
-        """A new instance id (1, 2, ...) of an object of ``category`` in mpcat40 ``mpcat40``."""
-        iid = len(self.instances) + 1
-        self.instances.append(Instance(iid, category, mpcat40_index(mpcat40), region, obj))
-        return iid
-
-    def add(self, instance: int, material: Material, solid: Solid) -> None:
-        """Draws ``solid`` in ``material`` as part of ``instance``."""
-        self._pieces.setdefault((instance, material.key), []).append(solid)
-
-    def parts(self) -> tuple[list[MeshPart], SceneLabels]:
-        """The mesh parts, one per (instance, material), and their labels."""
-        parts, names = [], {}
-        textures = self.palette.textures
-        for (iid, key), solids in self._pieces.items():
-            material = self.palette.materials[key]
-            solid = merge(solids)
-            uv = None
-            if material.texture is not None:
-                scale = material.tile_m if material.tile_m > 0 else 1.0
-                uv = (solid.uv / scale).astype(np.float32)
-            name = f"{iid}:{key}"
-            names[name] = iid
-            parts.append(
-                MeshPart(
-                    name,
-                    solid.vertices,
-                    solid.faces,
-                    material.rgba,
-                    uv,
-                    None if material.texture is None else textures[material.texture],
-                    material.shine,
-                    material.emission,
-                )
-            )
-        return parts, SceneLabels(tuple(self.instances), names)
 
 
 def _architecture(dresser: Dresser, house: ProceduralHouse) -> None:
@@ -102,9 +53,6 @@ def dress_house(house: ProceduralHouse) -> tuple[list[MeshPart], SceneLabels]:
         (parts, labels): one mesh part per (object instance, material), named
         ``"<instance>:<material>"``, and the instances with their mpcat40 classes.
     """
-    from havln_mj.scene.procedural.dressing import dress_rooms
-    from havln_mj.scene.procedural.furniture import draw_item
-
     rng = np.random.default_rng(np.random.SeedSequence([0x4A5C, house.seed, LOOK_SALT]))
     dresser = Dresser(Palette(rng))
     _architecture(dresser, house)
