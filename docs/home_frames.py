@@ -54,6 +54,7 @@ def _best_views(scan, model, data, count: int) -> list[tuple[str, float, str]]:
                 seg = render_labels(model, data, cam)
                 depth = cam.render(data, rgb=False).depth
                 score = len(np.unique(seg.instance)) + 2.0 * min(float(depth.mean()), 4.0)
+                score -= 30.0 * float(np.mean(depth < 1.3))  # not a view into a fridge door
                 scored.append((score, vp, float(heading), scan.regions.region_of(vp).label))
     chosen, kinds = [], set()
     for _, vp, heading, kind in sorted(scored, key=lambda s: -s[0]):

@@ -16,6 +16,7 @@ from havln_mj.scene.procedural.furnish import Item, door_keepouts, furnish_room,
 from havln_mj.scene.procedural.house import ProceduralHouse
 from havln_mj.scene.procedural.layout import plan_house
 from havln_mj.scene.procedural.look import dress_house
+from havln_mj.scene.procedural.materials import library_digest
 from havln_mj.scene.procedural.recipe import Recipe, load_recipe
 from havln_mj.scene.procedural.viewpoints import place_viewpoints, room_is_passable
 from havln_mj.scene.regions import Level, Region, Regions, SceneObject
@@ -123,6 +124,7 @@ def write_scan(house: ProceduralHouse, folder: Path, *, with_boxes: bool = True)
             "seed": house.seed,
             "generator_version": GENERATOR_VERSION,
             "recipe": house.recipe_digest,
+            "materials": library_digest(),
             "area_m2": round(house.area, 2),
         },
         indent=1,

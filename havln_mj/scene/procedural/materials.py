@@ -9,6 +9,7 @@ uses them; a material's colour tints its texture.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import zlib
 from dataclasses import dataclass
@@ -59,6 +60,11 @@ def _library(path: Path) -> dict[str, Any]:
 def load_library(path: Path | None = None) -> dict[str, Any]:
     """The material library (``assets/materials.json`` unless ``path`` is given)."""
     return _library((path or asset_path("assets", "materials.json")).resolve())
+
+
+def library_digest() -> str:
+    """A digest of the built-in material library, recorded in a built scan's ``scan.json``."""
+    return hashlib.sha256(asset_path("assets", "materials.json").read_bytes()).hexdigest()[:16]
 
 
 def _rgba(colour: Any, alpha: float = 1.0) -> tuple[float, float, float, float]:
