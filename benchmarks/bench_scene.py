@@ -58,7 +58,7 @@ def _views(scan, crowd, n: int) -> list[tuple[np.ndarray, float, float, float]]:
     return out
 
 
-def _render_fps(scan_home, frames: int, sizes) -> dict:
+def _render_fps(scan_home, frames: int, sizes, people_style: str) -> dict:
     from havln_mj import groups
     from havln_mj.humans.mujoco_people import PeopleWriter
     from havln_mj.humans.population import populate
@@ -66,17 +66,18 @@ def _render_fps(scan_home, frames: int, sizes) -> dict:
     from havln_mj.render.labels import render_labels
     from havln_mj.robot.point_body import CAMERA, PointBody
     from havln_mj.scene.scan import read_scan_folder
-    from havln_mj.sim.world import build_world
+    from havln_mj.sim.world import WorldOptions, build_world
 
     crowd = populate(scan_home, np.random.default_rng(0), count=4)
     tmp = Path(tempfile.mkdtemp(prefix="havln_plain_"))
     scans = {"plain": read_scan_folder(_plain_copy(scan_home, tmp / "plain")), "home": scan_home}
     views = _views(scan_home, crowd, frames)
-    result = {"people": len(crowd), "frames": frames}
+    result = {"people": len(crowd), "people_style": people_style, "frames": frames}
     for width, height in sizes:
         worlds = {}
         for name, scan in scans.items():
-            model = build_world(scan, people=crowd.shapes).model
+            options = WorldOptions(people_style=people_style)
+            model = build_world(scan, options, people=crowd.shapes).model
             data = mujoco.MjData(model)
             cam = Camera(model, CAMERA, width, height, geom_groups=groups.CAMERA_GROUPS)
             worlds[name] = (model, data, PeopleWriter(model, len(crowd)), cam)
@@ -117,6 +118,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
     ap.add_argument("--frames", type=int, default=60)
+    ap.add_argument("--people-style", default="pieces", help="pieces | skinned | capsules")
     args = ap.parse_args()
     os.environ["HAVLN_CACHE"] = tempfile.mkdtemp(prefix="havln_bench_")  # really cold
     os.environ.setdefault("MUJOCO_GL", "egl")
@@ -156,7 +158,7 @@ def main() -> None:
     for _ in range(n_steps):
         mujoco.mj_step(model, data)
     step_us = (time.perf_counter() - t) / n_steps * 1e6
-    render = _render_fps(scan, args.frames, ((640, 480), (128, 128)))
+    render = _render_fps(scan, args.frames, ((640, 480), (128, 128)), args.people_style)
     print(
         json.dumps(
             {
