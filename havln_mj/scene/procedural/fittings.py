@@ -319,4 +319,10 @@ def block_pieces(
     if name in builders:
         return builders[name]()
     cols, rows = _CASES.get(name, (max(1, round(w / 0.5)), 1))
-    return _case(p, f"room{room}", w, d, h, cols, rows)
+    out = _case(p, f"room{room}", w, d, h, cols, rows)
+    if name == "nightstand":  # a bedside lamp
+        r = 0.4 * min(w, d) / 2
+        glow = p.plain("lamp shade", (1.0, 0.97, 0.9), emission=1.0)
+        out.append((("lamp", 0), p.metal("brass"), cylinder(0.05, h, h + 0.2, 8)))
+        out.append((("lamp", 0), glow, frustum(1.4 * r, r, h + 0.18, h + 0.36, 12)))
+    return out

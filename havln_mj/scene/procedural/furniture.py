@@ -44,6 +44,7 @@ SUB_CLASSES = {
     "mirror": "mirror",
     "wall cabinet": "cabinet",
     "clothes": "clothes",
+    "lamp": "lighting",
 }
 
 
