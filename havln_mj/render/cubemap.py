@@ -41,9 +41,11 @@ GL_FACES = {
     (2, +1): (1, (0, +1), (1, -1)),
     (2, -1): (3, (0, -1), (1, -1)),
 }
-"""OpenGL's cube map rule with MatterSim's face order: for the largest component ``ma`` of a
-direction along ``axis`` with ``sign``, the file face, and ``s = (sc/|ma| + 1)/2``,
-``t = (tc/|ma| + 1)/2`` where ``sc``, ``tc`` are the given components times their signs."""
+"""OpenGL's cube map rule with MatterSim's face order.
+
+For the largest component ``ma`` of a direction along ``axis`` with ``sign``: the file face,
+and ``s = (sc/|ma| + 1)/2``, ``t = (tc/|ma| + 1)/2`` where ``sc``, ``tc`` are the given
+components times their signs."""
 
 
 def lookup(directions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

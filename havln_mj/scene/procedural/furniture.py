@@ -5,7 +5,7 @@ z up from the floor; see :mod:`~havln_mj.scene.procedural.furnish`), then turned
 where the item stands. The drawing keeps to the item's boxes, save for soft details that
 stand on them (pillows on a bed, a television on its stand, cabinets above a counter).
 
-Builders return :data:`Piece` lists: ``(sub, material, solid)``; ``sub`` is None for the
+Builders return lists of pieces: ``(sub, material, solid)``; ``sub`` is None for the
 item itself, or ``(category, key)`` for a part that is an object of its own (a throw pillow
 is a cushion, books are objects, a dining chair is a chair), drawn as its own instance.
 """

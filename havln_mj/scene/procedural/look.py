@@ -50,8 +50,9 @@ def dress_house(house: ProceduralHouse) -> tuple[list[MeshPart], SceneLabels]:
     """The visual mesh of ``house`` and the labels of its parts.
 
     Returns:
-        (parts, labels): one mesh part per (object instance, material), named
-        ``"<instance>:<material>"``, and the instances with their mpcat40 classes.
+        The mesh parts, one per (object instance, material), named
+        ``"<instance>:<material>"``, and their labels (the instances with their mpcat40
+        classes).
     """
     rng = np.random.default_rng(np.random.SeedSequence([0x4A5C, house.seed, LOOK_SALT]))
     dresser = Dresser(Palette(rng))
