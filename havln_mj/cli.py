@@ -2,8 +2,10 @@
 
 Each scene is built in its own process (scan folder, collision geometry, compiled world), so
 later runs load from the cache at once. Run ``havln_mj scenes build --help`` for options.
-``havln_mj dataset build --scenes <ids...> --split <name>`` writes an HA-R2R style split of
-generated episodes (see :mod:`havln_mj.tasks.procedural`).
+``havln_mj scenes export ID --out DIR`` writes a built world as MJCF with its meshes and
+textures (see :mod:`havln_mj.sim.export`). ``havln_mj dataset build --scenes <ids...> --split
+<name>`` writes an HA-R2R style split of generated episodes (see
+:mod:`havln_mj.tasks.procedural`).
 """
 
 from __future__ import annotations
@@ -96,6 +98,60 @@ def scenes_build(args: argparse.Namespace) -> int:
     return 1 if failures else 0
 
 
+def scenes_export(args: argparse.Namespace) -> int:
+    """Exports one scene as MJCF; prints what was written."""
+    from havln_mj.sim.export import export_scene
+
+    done = export_scene(
+        args.id,
+        args.out,
+        time=args.time,
+        body=args.body,
+        seed=args.seed,
+        humans=not args.no_people,
+        viewpoint=args.viewpoint,
+        collision=args.collision,
+        mp3d_dir=args.mp3d_dir,
+        connectivity_dir=args.connectivity_dir,
+        human_placements=args.human_placements,
+    )
+    print(
+        f"wrote {done.xml} ({done.ngeom} geoms, {done.people} people at t = {args.time:g} s, "
+        f"{done.meshes} meshes, {done.textures} textures); view it with "
+        f"python -m mujoco.viewer --mjcf={done.xml}"
+    )
+    return 0
+
+
+def _add_export_parser(scenes: argparse._SubParsersAction) -> None:
+    export = scenes.add_parser(
+        "export", help="write a built world (building, people, robot) as MJCF with its assets"
+    )
+    export.add_argument("id", help="scene id: proc-<seed>, a Matterport scan id, a scan folder")
+    export.add_argument("--out", type=Path, required=True, help="output folder")
+    export.add_argument(
+        "--time", type=float, default=0.0, help="simulated seconds at which people are posed"
+    )
+    export.add_argument(
+        "--body", choices=("point", "go1"), default="point", help="the agent: camera rig or GO1"
+    )
+    export.add_argument("--seed", type=int, default=0, help="simulator seed: which people")
+    export.add_argument("--no-people", action="store_true", help="leave the people out")
+    export.add_argument(
+        "--viewpoint", default=None, help="where the agent stands (default: the first one)"
+    )
+    export.add_argument(
+        "--collision", choices=COLLISION_MODES, default="auto", help="collision geometry"
+    )
+    export.add_argument("--mp3d-dir", type=Path, default=None, help="Matterport3D data root")
+    export.add_argument(
+        "--connectivity-dir", type=Path, default=None, help="folder of connectivity graphs"
+    )
+    export.add_argument(
+        "--human-placements", type=Path, default=None, help="HA3D human placement file"
+    )
+
+
 def dataset_build(args: argparse.Namespace) -> int:
     """Generates a split with a progress bar; prints the files and instruction lengths."""
     from havln_mj.tasks.procedural import build_split
@@ -130,6 +186,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     build.add_argument("--collision", choices=COLLISION_MODES, default="auto")
     build.add_argument("--workers", type=int, default=2, help="parallel processes (default 2)")
+    _add_export_parser(scenes)
     dataset = sub.add_parser("dataset", help="episode datasets").add_subparsers(
         dest="command", required=True
     )
@@ -149,10 +206,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.group == "dataset":
         if args.episodes_per_scene < 1:
             parser.error(f"--episodes-per-scene must be at least 1, got {args.episodes_per_scene}")
-    elif args.workers < 1:
+    elif args.command == "build" and args.workers < 1:
         parser.error(f"--workers must be at least 1, got {args.workers}")
     try:
-        return dataset_build(args) if args.group == "dataset" else scenes_build(args)
+        if args.group == "dataset":
+            return dataset_build(args)
+        return scenes_export(args) if args.command == "export" else scenes_build(args)
     except HavlnError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
