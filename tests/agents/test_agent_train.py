@@ -85,7 +85,7 @@ def test_config_errors(tmp_path, capsys):
     assert read_config(Path("vln_cm_smoke"), "vln_cm", []).iterations == 4  # built-in by name
     with pytest.raises(MissingDataError, match="agents/configs"):
         read_config(tmp_path / "none.json", None, [])
-    with pytest.raises(InvalidArgumentError, match="unknown config keys"):
+    with pytest.raises(InvalidArgumentError, match="unknown config key 'epochs'"):
         read_config(_config(tmp_path, {**CM, "epochs": 3}), None, [])
     with pytest.raises(InvalidArgumentError, match="is for 'vln_cm'"):
         read_config(_config(tmp_path, CM), "vln_dt", [])
