@@ -12,7 +12,7 @@ import torch
 
 from havln_mj.agents.checkpoint import AGENTS
 from havln_mj.agents.train.config import read_config
-from havln_mj.agents.train.trainer import Trainer
+from havln_mj.agents.train.trainer import Trainer, checkpoint_to_resume
 from havln_mj.errors import HavlnError
 
 
@@ -64,6 +64,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         cfg = read_config(args.config, args.agent, args.overrides)
         out = (args.out or Path("runs") / cfg.agent).expanduser().resolve()
+        if args.resume:
+            checkpoint_to_resume(out)  # before the features are built
         trainer = Trainer(
             cfg,
             out,

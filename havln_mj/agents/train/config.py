@@ -96,9 +96,13 @@ def resolved_features(features: Mapping[str, Any]) -> dict[str, Any]:
 
     check_keys("features", features, [n for n in _fields(FeatureSpec) if n != "seed"])
     check_keys("features.view", features.get("view", {}), _fields(ViewConfig))
-    encoder_args = [p for p in inspect.signature(ViewEncoder).parameters if p != "in_channels"]
-    check_keys("features.encoder", features.get("encoder", {}), encoder_args)
-    spec = FeatureSpec.from_dict(dict(features))
+    params = inspect.signature(ViewEncoder).parameters
+    defaults = {k: p.default for k, p in params.items() if k != "in_channels"}
+    check_keys("features.encoder", features.get("encoder", {}), defaults)
+    encoder = {k: list(v) if isinstance(v, tuple) else v for k, v in defaults.items()}
+    spec = FeatureSpec.from_dict(
+        {**features, "encoder": {**encoder, **features.get("encoder", {})}}
+    )
     out = dataclasses.asdict(spec)
     out.pop("seed")  # the run's people seed
     return out

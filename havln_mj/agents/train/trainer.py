@@ -66,6 +66,21 @@ def data_parallel(model: nn.Module, device: torch.device) -> nn.Module:
     return model
 
 
+def checkpoint_to_resume(out: Path) -> Path:
+    """The checkpoint a run in ``out`` resumes from.
+
+    Raises:
+        MissingDataError: There is none.
+    """
+    path = Path(out) / "checkpoint.pt"
+    if not path.is_file():
+        raise MissingDataError(
+            f"--resume: no checkpoint to resume from at {path}; run without --resume to "
+            "start this run, or give the --out of the run to continue"
+        )
+    return path
+
+
 class Trainer:
     """One training run (see :mod:`havln_mj.agents.train`).
 
@@ -152,12 +167,7 @@ class Trainer:
             InvalidArgumentError: It was written by a run with another configuration (other
                 than its ``iterations``).
         """
-        path = self.out / "checkpoint.pt"
-        if not path.is_file():
-            raise MissingDataError(
-                f"--resume: no checkpoint to resume from at {path}; run without --resume to "
-                "start this run, or give the --out of the run to continue"
-            )
+        path = checkpoint_to_resume(self.out)
         saved = AgentBundle.load(path)
         try:
             theirs = TrainConfig.from_dict(saved.state.get("config", {})).resolved()
