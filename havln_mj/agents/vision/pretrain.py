@@ -191,16 +191,8 @@ def pretrain_encoder(
     Raises:
         InvalidArgumentError: Mismatched array lengths, bad targets or settings.
     """
-    rgb = check_rgb(rgb)
-    n = len(rgb)
-    if depth is not None and len(depth) != n:
-        raise InvalidArgumentError(f"depth has {len(depth)} rows, rgb {n}")
-    if n < 2 or epochs < 1 or batch_size < 2 or not lr > 0:
-        raise InvalidArgumentError(
-            f"need ≥ 2 images (got {n}), epochs ≥ 1 (got {epochs}), batch_size ≥ 2 "
-            f"(got {batch_size}) and lr > 0 (got {lr})"
-        )
-    rows = _Rows(rgb, depth, _check_targets(targets, n, n_regions))
+    rows = _rows(rgb, depth, targets, n_regions, epochs, batch_size, lr)
+    n = len(rows.rgb)
     grid = tuple(rows.targets["depth"].shape[1:]) if "depth" in rows.targets else (6, 8)
     rng = np.random.default_rng(seed)
     train_idx, val_idx = _split(n, val_fraction, rng, groups)
@@ -212,6 +204,7 @@ def pretrain_encoder(
         params = list(encoder.parameters()) + list(heads.parameters())
         opt = torch.optim.AdamW(params, lr=lr, weight_decay=weight_decay)
         sched = _warmup_cosine(opt, max(1, steps_per_epoch * epochs))
+        step = _Step(encoder, heads, opt, sched, params, flip, loss_weights)
         for epoch in range(epochs):
             t0 = time.perf_counter()
             encoder.train()
@@ -223,20 +216,38 @@ def pretrain_encoder(
                 disable=not progress,
                 leave=False,
             )
-            order = rng.permutation(train_idx)
-            step = _Step(encoder, heads, opt, sched, params, flip, loss_weights)
-            means = _train_epoch(step, rows, order, batch_size, rng, bar)
+            means = _train_epoch(step, rows, rng.permutation(train_idx), batch_size, rng, bar)
             bar.close()
-            record: dict[str, float] = {"epoch": epoch + 1}
-            record.update({f"train_{k}": v for k, v in means.items()})
+            record = {"epoch": epoch + 1, **{f"train_{k}": v for k, v in means.items()}}
             if len(val_idx):
                 encoder.eval()
                 heads.eval()
                 record.update(_evaluate(encoder, heads, rows, val_idx, max(batch_size, 256)))
-            record["seconds"] = time.perf_counter() - t0
-            history.append(record)
+            history.append({**record, "seconds": time.perf_counter() - t0})
     encoder.eval()
     return history
+
+
+def _rows(
+    rgb: np.ndarray,
+    depth: np.ndarray | None,
+    targets: Mapping[str, np.ndarray],
+    n_regions: int,
+    epochs: int,
+    batch_size: int,
+    lr: float,
+) -> _Rows:
+    """The checked pretraining set; raises on what :func:`pretrain_encoder` rejects."""
+    rgb = check_rgb(rgb)
+    n = len(rgb)
+    if depth is not None and len(depth) != n:
+        raise InvalidArgumentError(f"depth has {len(depth)} rows, rgb {n}")
+    if n < 2 or epochs < 1 or batch_size < 2 or not lr > 0:
+        raise InvalidArgumentError(
+            f"need ≥ 2 images (got {n}), epochs ≥ 1 (got {epochs}), batch_size ≥ 2 "
+            f"(got {batch_size}) and lr > 0 (got {lr})"
+        )
+    return _Rows(rgb, depth, _check_targets(targets, n, n_regions))
 
 
 def _warmup_cosine(

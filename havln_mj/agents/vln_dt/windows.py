@@ -79,6 +79,29 @@ class DTDataset(Sequence[Demo]):
         return cache[i]
 
 
+def _checked(
+    demos: Sequence[Demo], cfg: DTConfig, batch_size: int, rtg_scale: float | None
+) -> tuple[DTDataset, float]:
+    """The demos as a :class:`DTDataset` and the scale; raises on what sampling rejects."""
+    if batch_size < 1:
+        raise InvalidArgumentError(f"batch_size must be at least 1, got {batch_size}")
+    scale = cfg.rtg_scale if rtg_scale is None else float(rtg_scale)
+    if not np.isfinite(scale) or scale <= 0:
+        raise InvalidArgumentError(f"rtg_scale must be a positive number, got {rtg_scale!r}")
+    data = demos if isinstance(demos, DTDataset) else DTDataset(demos)
+    if data.obs_dim != cfg.obs_dim:
+        raise InvalidArgumentError(
+            f"demos have observations of size {data.obs_dim}, the config expects "
+            f"obs_dim={cfg.obs_dim}"
+        )
+    longest = int(data.lengths.max())
+    if longest > cfg.max_timestep:
+        raise InvalidArgumentError(
+            f"a demo has {longest} steps, more than cfg.max_timestep={cfg.max_timestep}"
+        )
+    return data, scale
+
+
 def sample_windows(
     demos: Sequence[Demo],
     cfg: DTConfig,
@@ -116,22 +139,7 @@ def sample_windows(
         InvalidArgumentError: No demos, ``batch_size < 1``, an observation size other than
             ``cfg.obs_dim``, a demo longer than ``cfg.max_timestep``, or a bad scale.
     """
-    if batch_size < 1:
-        raise InvalidArgumentError(f"batch_size must be at least 1, got {batch_size}")
-    scale = cfg.rtg_scale if rtg_scale is None else float(rtg_scale)
-    if not np.isfinite(scale) or scale <= 0:
-        raise InvalidArgumentError(f"rtg_scale must be a positive number, got {rtg_scale!r}")
-    data = demos if isinstance(demos, DTDataset) else DTDataset(demos)
-    if data.obs_dim != cfg.obs_dim:
-        raise InvalidArgumentError(
-            f"demos have observations of size {data.obs_dim}, the config expects "
-            f"obs_dim={cfg.obs_dim}"
-        )
-    longest = int(data.lengths.max())
-    if longest > cfg.max_timestep:
-        raise InvalidArgumentError(
-            f"a demo has {longest} steps, more than cfg.max_timestep={cfg.max_timestep}"
-        )
+    data, scale = _checked(demos, cfg, batch_size, rtg_scale)
     reward = cfg.reward if reward is None else reward
 
     idx = rng.choice(len(data), size=batch_size, p=data.lengths / data.lengths.sum())
