@@ -111,6 +111,7 @@ def scenes_export(args: argparse.Namespace) -> int:
         humans=not args.no_people,
         viewpoint=args.viewpoint,
         collision=args.collision,
+        solid_people=args.solid_people,
         mp3d_dir=args.mp3d_dir,
         connectivity_dir=args.connectivity_dir,
         human_placements=args.human_placements,
@@ -142,6 +143,9 @@ def _add_export_parser(scenes: argparse._SubParsersAction) -> None:
     )
     export.add_argument(
         "--collision", choices=COLLISION_MODES, default="auto", help="collision geometry"
+    )
+    export.add_argument(
+        "--solid-people", action="store_true", help="people's bodies collide (push a robot)"
     )
     export.add_argument("--mp3d-dir", type=Path, default=None, help="Matterport3D data root")
     export.add_argument(

@@ -92,19 +92,20 @@ def build_spec(
     body: str,
     options: WorldOptions,
     viewpoint: str | None = None,
+    solid_people: bool = False,
 ) -> mujoco.MjSpec:
     """The world spec the simulator compiles for ``body``, before posing.
 
     The point body's world is :func:`~havln_mj.sim.world.world_spec` plus the people; the
-    GO1's adds the robot standing at the viewpoint's floor, with people solid (as the legged
-    world builds them when they push the robot, so their contacts are part of the model).
+    GO1's adds the robot standing at the viewpoint's floor. ``solid_people`` makes people's
+    geoms collide, as the legged world builds them when people push the robot.
     """
     if body not in BODIES:
         raise InvalidArgumentError(f"body {body!r} unknown; valid: {', '.join(BODIES)}")
     if body == "go1" and options.collision == "none":
         raise InvalidArgumentError("a GO1 needs floors to stand on: collision 'none' is invalid")
     spec, _, _ = world_spec(scan, options)
-    add_people(spec, crowd.shapes, crowd.skins, solid=body == "go1")
+    add_people(spec, crowd.shapes, crowd.skins, solid=solid_people)
     if body == "go1":
         from havln_mj.robot.go1.model import add_go1
 
@@ -229,6 +230,7 @@ def export_scene(
     humans: bool = True,
     viewpoint: str | None = None,
     collision: str = "auto",
+    solid_people: bool = False,
     mp3d_dir: str | Path | None = None,
     connectivity_dir: str | Path | None = None,
     human_placements: str | Path | None = None,
@@ -244,6 +246,7 @@ def export_scene(
         humans: Include people.
         viewpoint: Where the agent stands (default: the graph's first viewpoint).
         collision: Collision geometry mode (see :class:`~havln_mj.sim.world.WorldOptions`).
+        solid_people: People's geoms collide (the GO1's ``physical_humans`` setting).
         mp3d_dir: Root of the user's Matterport3D data.
         connectivity_dir: Folder of navigation graphs.
         human_placements: HA3D placement file.
@@ -260,7 +263,8 @@ def export_scene(
         raise InvalidArgumentError(f"time must be a finite number of seconds ≥ 0, got {time!r}")
     scan = load_scan(scene, mp3d_dir=mp3d_dir, connectivity_dir=connectivity_dir)
     crowd = scene_crowd(scan, seed, human_placements)[0] if humans else NO_CROWD
-    spec = build_spec(scan, crowd, body, WorldOptions(collision=collision), viewpoint)
+    options = WorldOptions(collision=collision)
+    spec = build_spec(scan, crowd, body, options, viewpoint, solid_people)
     _, position, _ = _start(scan, viewpoint)
     pose_spec(spec, crowd, time, PointBody(position))
     out = Path(out).expanduser().resolve()

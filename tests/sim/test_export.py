@@ -33,6 +33,7 @@ print(json.dumps({
     "type": m.geom_type.tolist(),
     "size": m.geom_size.tolist(),
     "group": m.geom_group.tolist(),
+    "contype": m.geom_contype.tolist(),
     "nmesh": m.nmesh,
     "mocap_pos": {m.body(b).name: m.body_pos[b].tolist()
                   for b in range(m.nbody) if m.body_mocapid[b] >= 0},
@@ -53,6 +54,7 @@ def _same_geoms(loaded: dict, model: mujoco.MjModel) -> None:
     assert loaded["names"] == [model.geom(i).name for i in range(model.ngeom)]
     assert loaded["type"] == model.geom_type.tolist()
     assert loaded["group"] == model.geom_group.tolist()
+    assert loaded["contype"] == model.geom_contype.tolist()
     # MuJoCo writes numbers to MJCF with 7 significant digits: sizes agree to that.
     np.testing.assert_allclose(np.array(loaded["size"]), model.geom_size, rtol=1e-6, atol=1e-6)
 
@@ -80,12 +82,13 @@ def test_exported_point_scene_loads_elsewhere_with_the_simulators_geoms(tmp_path
     )
 
 
-def test_exported_go1_scene_has_the_legged_worlds_geoms(tmp_path):
-    done = export_scene(SCENE, tmp_path, time=1.0, body="go1")
+@pytest.mark.parametrize("solid", [False, True])
+def test_exported_go1_scene_has_the_legged_worlds_geoms(tmp_path, solid):
+    done = export_scene(SCENE, tmp_path, time=1.0, body="go1", solid_people=solid)
     loaded = _load_elsewhere(done.xml, tmp_path.parent)
     scan = load_scan(SCENE)
     crowd = scene_crowd(scan, 0)[0]
-    legged = LeggedWorld(scan, WorldOptions(), crowd, LeggedOptions(physical_humans=True))
+    legged = LeggedWorld(scan, WorldOptions(), crowd, LeggedOptions(physical_humans=solid))
     _same_geoms(loaded, legged.model)
     model = mujoco.MjModel.from_xml_path(str(done.xml))
     data = mujoco.MjData(model)
