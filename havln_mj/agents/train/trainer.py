@@ -146,6 +146,7 @@ class Trainer:
             "numpy_rng": self.rng.bit_generator.state,
             "torch_gen": self.gen.get_state(),
             "torch_rng": torch.get_rng_state(),
+            "cuda_rng": torch.cuda.get_rng_state_all() if self.device.type == "cuda" else None,
             "history": self.history,
             "best": self.best,
         }
@@ -185,6 +186,8 @@ class Trainer:
         self.rng.bit_generator.state = saved.state["numpy_rng"]
         self.gen.set_state(saved.state["torch_gen"])
         torch.set_rng_state(saved.state["torch_rng"])
+        if saved.state.get("cuda_rng") is not None and self.device.type == "cuda":
+            torch.cuda.set_rng_state_all(saved.state["cuda_rng"])
         self.iteration = saved.state["iteration"]
         self.history = saved.state["history"]
         self.best = saved.state["best"]
