@@ -31,7 +31,7 @@ python - "$RUNS" "${CHECK[*]}" <<'PY'
 import json, sys
 from pathlib import Path
 runs, check = Path(sys.argv[1]), sys.argv[2].split()
-manifest = {}
+manifest, timing = {}, ("seconds", "instructions_per_s")
 for agent in ("vln_cm", "vln_dt"):
     name = f"{agent}_small"
     rows = [json.loads((runs / "eval" / name / s / "summary.json").read_text())[0]
@@ -42,10 +42,11 @@ for agent in ("vln_cm", "vln_dt"):
         "train": f"python -m havln_mj.agents.train --config {name} --out runs/{name}",
         "release": f"python -m havln_mj.agents.release runs/{name}/best.pt agents/{name}.pt",
         "check": check,
-        "splits": {r["split"]: {k: v for k, v in r.items() if k not in ("seconds", "instructions_per_s")} for r in rows},
+        "splits": {r["split"]: {k: v for k, v in r.items() if k not in timing} for r in rows},
     }
 Path("agents/checkpoints.json").write_text(json.dumps(manifest, indent=1) + "\n")
 PY
-python -m havln_mj.eval.tables --out agents/checkpoints.md --splits val_seen val_unseen check \
-    --row "VLN-CM small (seed 0)=$RUNS/eval/vln_cm_small" \
-    --row "VLN-DT small (seed 0)=$RUNS/eval/vln_dt_small"
+python -m havln_mj.eval.tables --out "$RUNS/eval/table.md" --splits val_seen val_unseen check \
+    --row "VLN-CM small (agents/vln_cm_small.pt)=$RUNS/eval/vln_cm_small" \
+    --row "VLN-DT small (agents/vln_dt_small.pt)=$RUNS/eval/vln_dt_small"
+cp "$RUNS/eval/table.md" agents/checkpoints.md

@@ -3,7 +3,9 @@
 A checkpoint holds the agent kind (``vln_cm`` / ``vln_dt``), the model's configuration and
 weights, the instruction vocabulary, the view encoder (configuration and weights) with the
 feature settings, and for resuming the training configuration, iteration, optimiser state,
-generator states and loss history. Files are written atomically.
+generator states and loss history (a released checkpoint, :meth:`AgentBundle.released`, keeps
+the configuration, iteration and history only). Files are written atomically. The trained
+checkpoints shipped in ``agents/`` load by name (:func:`resolve_checkpoint`).
 """
 
 from __future__ import annotations
