@@ -4,7 +4,7 @@
 #   agents/vln_dt_small.pt   agents/configs/vln_dt_small.json (seed 0)
 # Each is evaluated on the procedural benchmark's val_seen (proc-0 … proc-39, 3 new paths each)
 # and val_unseen (proc-100 … proc-109, 12 paths each), and on the small "check" split a test
-# re-runs (proc-100, 2 paths). Writes agents/checkpoints.md (the table) and
+# re-runs (val_seen's 3 paths of proc-31). Writes agents/checkpoints.md (the table) and
 # agents/checkpoints.json (every metric, with the commands).
 # Usage: agents/make_checkpoints.sh [RUNS_DIR]   (default: runs/shipped; THREADS=1)
 set -euo pipefail
@@ -13,7 +13,7 @@ RUNS=${1:-runs/shipped}
 THREADS=${THREADS:-1}
 SEEN=(--scenes proc-0:40 --per-scene 3 --skip 20 --split val_seen)
 UNSEEN=(--scenes proc-100:110 --per-scene 12 --split val_unseen)
-CHECK=(--scenes proc-100 --per-scene 2 --split check)
+CHECK=(--scenes proc-31 --per-scene 3 --skip 20 --split check)
 
 for agent in vln_cm vln_dt; do
     name="${agent}_small"
@@ -39,8 +39,8 @@ for agent in ("vln_cm", "vln_dt"):
     (runs / "eval" / name / "summary.json").write_text(json.dumps(rows, indent=1))
     manifest[f"{name}.pt"] = {
         "agent": agent,
-        "train": f"python -m havln_mj.agents.train --config {name} --out runs/{name}",
-        "release": f"python -m havln_mj.agents.release runs/{name}/best.pt agents/{name}.pt",
+        "train": f"python -m havln_mj.agents.train --config {name} --out runs/shipped/{name}",
+        "release": f"python -m havln_mj.agents.release runs/shipped/{name}/best.pt agents/{name}.pt",
         "check": check,
         "splits": {r["split"]: {k: v for k, v in r.items() if k not in timing} for r in rows},
     }

@@ -25,7 +25,6 @@ def test_every_shipped_checkpoint_is_listed_small_and_released():
         assert "optimizer" not in bundle.state and bundle.state["history"]
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(MANIFEST))
 def test_shipped_checkpoint_reproduces_its_check_row(name, tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)  # the checkpoint is found by its shipped name, from anywhere
