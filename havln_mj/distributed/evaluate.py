@@ -28,7 +28,7 @@ from havln_mj.distributed._ray import ensure_ray
 from havln_mj.errors import HavlnError
 from havln_mj.eval.run import _simulator, make_agent, run_cli
 from havln_mj.eval.run import parse_args as eval_parse_args
-from havln_mj.tasks.datasets import Episode
+from havln_mj.tasks.episodes import Episode
 from havln_mj.tasks.experts import run_expert
 from havln_mj.tasks.metrics import EvalEpisode, Evaluator, MetricConfig
 

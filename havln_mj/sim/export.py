@@ -33,8 +33,7 @@ from havln_mj.errors import (
     UnknownViewpointError,
     did_you_mean,
 )
-from havln_mj.humans.mujoco_people import PeopleWriter, add_people
-from havln_mj.humans.skinned import skin_body_name
+from havln_mj.humans.drawing import PeopleDrawing
 from havln_mj.robot.point_body import PointBody
 from havln_mj.scene.scan import Scan, load_scan
 from havln_mj.sim.crowd import NO_CROWD, Crowd
@@ -65,13 +64,14 @@ class ExportedScene:
 
 
 def scene_crowd(
-    scan: Scan, seed: int, human_placements: str | Path | None = None
-) -> tuple[Crowd, np.random.Generator]:
+    scan: Scan, seed: int, human_placements: str | Path | None = None, together: float = 0.0
+) -> Crowd:
     """The people the simulator gives ``scan`` under ``seed`` (its per-scan generator rule)."""
     from havln_mj.sim.people import HumanCrowds  # the humans package, only when used
 
     rng = np.random.default_rng([seed, zlib.crc32(scan.scene_id.encode())])
-    return HumanCrowds(lambda _: scan, human_placements)(scan.scene_id, scan.graph, rng), rng
+    crowds = HumanCrowds(lambda _: scan, human_placements, together=together)
+    return crowds(scan.scene_id, scan.graph, rng)
 
 
 def _start(scan: Scan, viewpoint: str | None) -> tuple[str, np.ndarray, float]:
@@ -88,7 +88,7 @@ def _start(scan: Scan, viewpoint: str | None) -> tuple[str, np.ndarray, float]:
 
 def build_spec(
     scan: Scan,
-    crowd: Crowd,
+    people: PeopleDrawing,
     body: str,
     options: WorldOptions,
     viewpoint: str | None = None,
@@ -105,7 +105,7 @@ def build_spec(
     if body == "go1" and options.collision == "none":
         raise InvalidArgumentError("a GO1 needs floors to stand on: collision 'none' is invalid")
     spec, _, _ = world_spec(scan, options)
-    add_people(spec, crowd.shapes, crowd.skins, solid=solid_people)
+    people.add_to(spec, solid=solid_people)
     if body == "go1":
         from havln_mj.robot.go1.model import add_go1
 
@@ -114,21 +114,39 @@ def build_spec(
     return spec
 
 
-def pose_spec(spec: mujoco.MjSpec, crowd: Crowd, time: float, camera: PointBody) -> mujoco.MjModel:
+def _bake_mesh(spec: mujoco.MjSpec, model: mujoco.MjModel, mesh: int) -> None:
+    """Writes a compiled mesh's current vertices back into the spec, in its body's frame.
+
+    A skinned person's mesh is posed in the compiled model (vertices in the mesh's own frame,
+    placed by its geom); the spec's mesh takes them in the body frame and its geom sits at
+    the body's origin, so compiling the spec again gives the same surface.
+    """
+    adr, num = int(model.mesh_vertadr[mesh]), int(model.mesh_vertnum[mesh])
+    for g in np.flatnonzero(
+        (model.geom_type == mujoco.mjtGeom.mjGEOM_MESH) & (model.geom_dataid == mesh)
+    ):
+        rot = np.empty(9)
+        mujoco.mju_quat2Mat(rot, model.geom_quat[g])
+        local = model.mesh_vert[adr : adr + num] @ rot.reshape(3, 3).T + model.geom_pos[g]
+        target = spec.mesh(model.mesh(mesh).name)
+        target.uservert = local.astype(np.float32).ravel()
+        target.usernormal = []  # recomputed from the posed surface
+        geom = spec.geom(model.geom(g).name)
+        geom.pos, geom.quat = (0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0)
+
+
+def pose_spec(
+    spec: mujoco.MjSpec, people: PeopleDrawing, time: float, camera: PointBody
+) -> mujoco.MjModel:
     """Poses the people at ``time`` and the camera rig, writing the poses into the spec.
 
-    Every mocap body's initial pose becomes the pose it has at ``time``; skinned people's
-    meshes take their posed vertices. Returns the model compiled before posing.
+    Every mocap body's initial pose becomes the pose it has at ``time``; skinned meshes take
+    their posed vertices. Returns the model compiled before posing.
     """
     model = spec.compile()
     data = mujoco.MjData(model)
-    if len(crowd):
-        PeopleWriter(model, len(crowd.shapes)).write(data, *crowd.pose(time))
-        for k, world in crowd.skin_vertices(time).items():
-            name = skin_body_name(k)
-            centre = world.mean(axis=0)
-            spec.mesh(f"{name}_mesh").uservert = (world - centre).ravel().tolist()
-            data.mocap_pos[model.body(name).mocapid[0]] = centre
+    for mesh in people.poser(model).pose(data, time):
+        _bake_mesh(spec, model, mesh)
     camera.write(model, data)
     for b in range(model.nbody):
         mocap = int(model.body_mocapid[b])
@@ -228,6 +246,8 @@ def export_scene(
     body: str = "point",
     seed: int = 0,
     humans: bool = True,
+    together: float = 0.0,
+    people_style: str = "pieces",
     viewpoint: str | None = None,
     collision: str = "auto",
     solid_people: bool = False,
@@ -244,6 +264,8 @@ def export_scene(
         body: ``"point"`` (the camera rig) or ``"go1"`` (adds the robot).
         seed: The simulator's seed: which people the scene has and what they do.
         humans: Include people.
+        together: The chance that a placed person is joined by others (the simulator's).
+        people_style: How people are drawn (:data:`~havln_mj.humans.mujoco_people.DRAW_STYLES`).
         viewpoint: Where the agent stands (default: the graph's first viewpoint).
         collision: Collision geometry mode (see :class:`~havln_mj.sim.world.WorldOptions`).
         solid_people: People's geoms collide (the GO1's ``physical_humans`` setting).
@@ -255,18 +277,21 @@ def export_scene(
         What was written.
 
     Raises:
-        InvalidArgumentError: Unknown body, a negative or non-finite time.
+        InvalidArgumentError: Unknown body or people style, a negative or non-finite time.
         UnknownViewpointError: A viewpoint not in the scan.
         UnknownSceneError: Unknown scene id.
     """
     if not np.isfinite(time) or time < 0:
         raise InvalidArgumentError(f"time must be a finite number of seconds ≥ 0, got {time!r}")
+    if not 0.0 <= together <= 1.0:
+        raise InvalidArgumentError(f"together must be a chance in [0, 1], got {together!r}")
     scan = load_scan(scene, mp3d_dir=mp3d_dir, connectivity_dir=connectivity_dir)
-    crowd = scene_crowd(scan, seed, human_placements)[0] if humans else NO_CROWD
-    options = WorldOptions(collision=collision)
-    spec = build_spec(scan, crowd, body, options, viewpoint, solid_people)
+    crowd = scene_crowd(scan, seed, human_placements, together) if humans else NO_CROWD
+    options = WorldOptions(collision=collision, people_style=people_style)
+    people = PeopleDrawing(crowd, options.people_style)
+    spec = build_spec(scan, people, body, options, viewpoint, solid_people)
     _, position, _ = _start(scan, viewpoint)
-    pose_spec(spec, crowd, time, PointBody(position))
+    pose_spec(spec, people, time, PointBody(position))
     out = Path(out).expanduser().resolve()
     out.mkdir(parents=True, exist_ok=True)
     meshes, textures = write_meshes(spec, out), write_textures(spec, out)

@@ -4,6 +4,7 @@ world the simulator builds (same geoms, people posed at the chosen time, assets 
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 import sys
 
@@ -13,15 +14,19 @@ import pytest
 
 from havln_mj.cli import main as cli_main
 from havln_mj.errors import InvalidArgumentError, UnknownViewpointError
+from havln_mj.frames import camera_quat
 from havln_mj.humans.mujoco_people import PARK_Z, body_name
 from havln_mj.scene.mesh import MeshPart
 from havln_mj.scene.scan import load_scan
 from havln_mj.sim.export import export_scene, scene_crowd, write_meshes, write_textures
+from havln_mj.sim.frame import ViewSettings
 from havln_mj.sim.legged import LeggedOptions, LeggedWorld
+from havln_mj.sim.point import Stage
 from havln_mj.sim.visual import add_visual_parts
 from havln_mj.sim.world import WorldOptions, build_world
 
 SCENE = "proc-3"
+VFOV = math.radians(60.0)  # the world camera's own: renders here leave its field of view as built
 
 # Run in a fresh interpreter: nothing of havln_mj is imported, only MuJoCo reads the file.
 _LOAD = """
@@ -66,7 +71,7 @@ def test_exported_point_scene_loads_elsewhere_with_the_simulators_geoms(tmp_path
     assert len(list((out / "meshes").glob("*.obj"))) == done.meshes > 0
     loaded = _load_elsewhere(done.xml, tmp_path)  # another folder: paths are relative
     scan = load_scan(SCENE)
-    crowd = scene_crowd(scan, 0)[0]
+    crowd = scene_crowd(scan, 0)
     built = build_world(scan, WorldOptions(), crowd.shapes, crowd.skins).model
     _same_geoms(loaded, built)
     assert loaded["nmesh"] == built.nmesh
@@ -87,13 +92,57 @@ def test_exported_go1_scene_has_the_legged_worlds_geoms(tmp_path, solid):
     done = export_scene(SCENE, tmp_path, time=1.0, body="go1", solid_people=solid)
     loaded = _load_elsewhere(done.xml, tmp_path.parent)
     scan = load_scan(SCENE)
-    crowd = scene_crowd(scan, 0)[0]
+    crowd = scene_crowd(scan, 0)
     legged = LeggedWorld(scan, WorldOptions(), crowd, LeggedOptions(physical_humans=solid))
     _same_geoms(loaded, legged.model)
     model = mujoco.MjModel.from_xml_path(str(done.xml))
     data = mujoco.MjData(model)
     mujoco.mj_step(model, data, 50)  # the robot's physics runs from the file
     assert np.isfinite(data.qpos).all() and data.qpos[2] > 0.0
+
+
+def _view_of_a_person(stage, scan, crowd, t):
+    """The viewpoint and heading whose view shows most of a person at ``t``, and how much."""
+    settings = ViewSettings(32, 24, VFOV, human_mask=True)
+    pelvis = crowd.pose(t)[0][:, 0]
+    best = (0.0, None)
+    for vp in scan.graph.nodes:
+        pos = scan.graph.position(vp)
+        for x, y, _ in pelvis:
+            heading = math.atan2(x - pos[0], y - pos[1]) % (2 * math.pi)
+            shown = stage.render((pos, heading, 0.0), settings, t).human_mask.mean()
+            best = max(best, (shown, (vp, heading)), key=lambda b: b[0])
+    assert best[0] > 0.02, "no view of a person"
+    return (*best[1], best[0])
+
+
+def _render(model, data):
+    with mujoco.Renderer(model, 96, 128) as renderer:  # made after posing: skinned meshes too
+        renderer.update_scene(data, camera="agent_cam")
+        return renderer.render()
+
+
+@pytest.mark.parametrize("style", ["pieces", "skinned"])
+def test_exported_scene_looks_as_the_simulator_draws_it(tmp_path, style):
+    """Posed people (rigid pieces, or a skinned mesh baked in its pose) and the building."""
+    t = 3.0
+    scan = load_scan(SCENE)
+    crowd = scene_crowd(scan, 0)
+    stage = Stage(scan, WorldOptions(people_style=style), crowd)
+    vp, heading, person = _view_of_a_person(stage, scan, crowd, t)
+    stage.render((scan.graph.position(vp), heading, 0.0), ViewSettings(32, 24, VFOV), t)
+    ours = _render(stage.world.model, stage.data)  # the simulator's world, posed by it
+    stage.close()
+    done = export_scene(SCENE, tmp_path, time=t, viewpoint=vp, people_style=style)
+    model = mujoco.MjModel.from_xml_path(str(done.xml))
+    data = mujoco.MjData(model)
+    data.mocap_quat[model.body("agent").mocapid[0]] = camera_quat(heading, 0.0)
+    mujoco.mj_forward(model, data)
+    theirs = _render(model, data)
+    # Only stray edge pixels may differ (MJCF keeps 7 significant digits of each number): far
+    # fewer than a person misplaced or missing would change.
+    differ = np.abs(ours.astype(int) - theirs.astype(int)).max(axis=-1) > 10
+    assert differ.mean() < min(0.01, person / 4)
 
 
 def test_textured_meshes_and_textures_round_trip_through_files(tmp_path):

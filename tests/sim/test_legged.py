@@ -115,7 +115,7 @@ def test_a_fall_ends_the_episode(edge):
     a, _, h = edge
     sim = _sim()
     sim.newEpisode([SCAN], [a], [h], [0.0])
-    legged = sim._agents[0].legged  # tip the robot onto its back
+    legged = sim._batch.elements[0].body.agent  # tip the robot onto its back
     qa = legged.body.qadr
     legged.data.qpos[qa + 2] += 0.2
     legged.data.qpos[qa + 3 : qa + 7] = (0.0, 1.0, 0.0, 0.0)
@@ -191,7 +191,7 @@ def test_the_building_sleeps_and_the_robot_never_does(edge):
     a, _, h = edge
     sim = _sim()
     sim.newEpisode([SCAN], [a], [h], [0.0])
-    legged = sim._agents[0].legged
+    legged = sim._batch.elements[0].body.agent
     assert legged.world.model.opt.enableflags & mujoco.mjtEnableBit.mjENBL_SLEEP
     z0 = legged.position()[2]
     legged.run([("stand", 3.0)], 0.0)

@@ -9,7 +9,7 @@ import numpy as np
 from havln_mj.agents.checkpoint import AgentBundle
 from havln_mj.agents.policy import make_policy
 from havln_mj.agents.rollouts import EgoRollouts
-from havln_mj.tasks.datasets import Instruction
+from havln_mj.tasks.episodes import Instruction
 from havln_mj.tasks.rewards import SUCCESS_DISTANCE, StepOutcome, get_reward, step_reward
 
 

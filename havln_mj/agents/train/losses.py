@@ -18,7 +18,7 @@ from torch import nn
 from havln_mj.agents.demos import Demo
 from havln_mj.agents.rollouts import EgoRollouts
 from havln_mj.agents.vln_cm import START, VLNCM, sequence_loss
-from havln_mj.tasks.datasets import Instruction
+from havln_mj.tasks.episodes import Instruction
 
 
 def _device(model: nn.Module) -> torch.device:

@@ -12,7 +12,7 @@ from havln_mj.agents.featurize import FeatureSpec, build_features, load_encoder,
 from havln_mj.agents.train.config import TrainConfig
 from havln_mj.agents.vision import ViewEncoder
 from havln_mj.paths import cache_dir
-from havln_mj.tasks.datasets import Instruction
+from havln_mj.tasks.episodes import Instruction
 from havln_mj.tasks.vocab import Vocabulary
 
 
