@@ -157,16 +157,26 @@ def pose_spec(
     return model
 
 
-def _obj_text(vertices: np.ndarray, faces: np.ndarray, texcoords: np.ndarray | None) -> str:
-    """An OBJ file: float32 vertices at 9 significant digits (exact), 1-based faces."""
+def _obj_text(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    texcoords: np.ndarray | None,
+    normals: np.ndarray | None,
+) -> str:
+    """An OBJ file: float32 numbers at 9 significant digits (exact), 1-based faces.
+
+    Texture coordinates and normals, when given, are one per vertex (MuJoCo's user arrays).
+    """
     lines = [f"v {x:.9g} {y:.9g} {z:.9g}" for x, y, z in vertices]
-    f = faces + 1
-    if texcoords is None:
-        lines += [f"f {a} {b} {c}" for a, b, c in f]
-    else:
+    if texcoords is not None:
         # MuJoCo flips v when it reads an OBJ file (OBJ puts v = 0 at the image's bottom).
         lines += [f"vt {u:.9g} {1.0 - v:.9g}" for u, v in texcoords]
-        lines += [f"f {a}/{a} {b}/{b} {c}/{c}" for a, b, c in f]
+    if normals is not None:
+        lines += [f"vn {x:.9g} {y:.9g} {z:.9g}" for x, y, z in normals]
+    pattern = {(False, False): "{0}", (True, False): "{0}/{0}", (False, True): "{0}//{0}"}.get(
+        (texcoords is not None, normals is not None), "{0}/{0}/{0}"
+    )
+    lines += ["f " + " ".join(pattern.format(i) for i in face) for face in faces + 1]
     return "\n".join(lines) + "\n"
 
 
@@ -199,7 +209,13 @@ def write_meshes(spec: mujoco.MjSpec, out: Path) -> int:
             vertices = np.asarray(mesh.uservert, np.float32).reshape(-1, 3)
             faces = np.asarray(mesh.userface, np.int64).reshape(-1, 3)
             uv = np.asarray(mesh.usertexcoord, np.float32).reshape(-1, 2)
-            text = _obj_text(vertices, faces, uv if len(uv) else None)
+            normals = np.asarray(mesh.usernormal, np.float32).reshape(-1, 3)
+            text = _obj_text(
+                vertices,
+                faces,
+                uv if len(uv) else None,
+                normals if len(normals) == len(vertices) else None,
+            )
             atomic_write_bytes(target, text.encode())
             mesh.uservert, mesh.userface, mesh.usertexcoord, mesh.usernormal = [], [], [], []
         else:
@@ -212,7 +228,7 @@ def write_meshes(spec: mujoco.MjSpec, out: Path) -> int:
 
 
 def write_textures(spec: mujoco.MjSpec, out: Path) -> int:
-    """Writes every in-memory or file texture to ``out/textures`` as PNG."""
+    """Writes every texture to ``out/textures`` (in-memory ones as PNG, files as they are)."""
     import cv2
 
     used: set[str] = set()
@@ -220,9 +236,10 @@ def write_textures(spec: mujoco.MjSpec, out: Path) -> int:
         data = bytes(texture.data)
         if not data and not texture.file:
             continue  # a builtin texture (checker, gradient): MJCF describes it itself
-        file = _unique(texture.name, used, ".png")
+        source = None if data else _source_file(spec, texture.file, spec.texturedir)
+        file = _unique(texture.name, used, ".png" if source is None else source.suffix)
         target = out / "textures" / file
-        if data:
+        if source is None:
             c = texture.nchannel
             image = np.frombuffer(data, np.uint8).reshape(texture.height, texture.width, c)
             order = {1: [0], 3: [2, 1, 0], 4: [2, 1, 0, 3]}[c]  # OpenCV writes BGR(A)
@@ -233,7 +250,7 @@ def write_textures(spec: mujoco.MjSpec, out: Path) -> int:
             texture.data = b""
         else:
             target.parent.mkdir(parents=True, exist_ok=True)
-            shutil.copyfile(_source_file(spec, texture.file, spec.texturedir), target)
+            shutil.copyfile(source, target)
         texture.file = f"textures/{file}"
     return len(used)
 

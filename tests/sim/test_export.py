@@ -75,6 +75,11 @@ def test_exported_point_scene_loads_elsewhere_with_the_simulators_geoms(tmp_path
     built = build_world(scan, WorldOptions(), crowd.shapes, crowd.skins).model
     _same_geoms(loaded, built)
     assert loaded["nmesh"] == built.nmesh
+    # Meshes travel through OBJ files exactly: vertices, normals, texture coordinates, faces.
+    model = mujoco.MjModel.from_xml_path(str(done.xml))
+    for name in ("mesh_vert", "mesh_normal", "mesh_texcoord", "mesh_face", "mesh_facetexcoord"):
+        np.testing.assert_array_equal(getattr(model, name), getattr(built, name), err_msg=name)
+    np.testing.assert_array_equal(model.tex_data, built.tex_data)
     # People stand where the crowd puts them at t = 4 s, not parked below the building.
     positions, _ = crowd.pose(4.0)
     for k in range(len(crowd)):
