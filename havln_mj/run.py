@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from havln_mj import __version__
+from havln_mj import __version__, argchecks
 from havln_mj.errors import HavlnError, InvalidArgumentError
 from havln_mj.frames import heading_to
 from havln_mj.recording import OUTPUTS, Recording, staged_outputs
@@ -247,6 +247,16 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
             args.go1_camera_height is None or 0.1 <= args.go1_camera_height <= 3.0,
             f"--go1-camera-height must be in [0.1, 3] m, got {args.go1_camera_height}",
         ),
+    ]
+    checks += [
+        (message is None, message)
+        for message in (
+            argchecks.existing("--human-placements", args.human_placements, "file"),
+            argchecks.existing("--haps-dir", args.haps_dir),
+            argchecks.existing("--smpl-model", args.smpl_model, "file"),
+            argchecks.existing("--mp3d-dir", args.mp3d_dir),
+            argchecks.existing("--connectivity-dir", args.connectivity_dir),
+        )
     ]
     for ok, message in checks:
         if not ok:

@@ -7,3 +7,4 @@ REGIONS = "regions.json"  # levels, regions, objects, viewpoint -> region
 BOXES = "boxes.json"  # optional exact box geometry (procedural houses, graph proxies)
 ROUTES = "routes.json"  # optional: edges walked by a route, not straight (graph proxies)
 META = "scan.json"  # scene id, kind, provenance
+MANIFEST = "manifest.json"  # cached scans only: their inputs and files (see scene.cache_keys)

@@ -27,6 +27,8 @@ from havln_mj.scene.scan import Scan, floor_heights
 from havln_mj.sim.visual import add_visual_parts, safe_name
 
 COLLISION_MODES = ("auto", "boxes", "coacd", "none")
+"""How a world's collision geometry can be made, ``auto`` (exact boxes where the scan has them,
+else CoACD hulls of the mesh), ``boxes``, ``coacd``, or ``none``."""
 
 
 @dataclass(frozen=True)

@@ -190,4 +190,7 @@ def test_scenes_export_command(tmp_path, capsys):
     assert f"wrote {out / SCENE}.xml" in capsys.readouterr().out
     model = mujoco.MjModel.from_xml_path(str(out / f"{SCENE}.xml"))
     assert not any(model.body(b).name.startswith("human") for b in range(model.nbody))
-    assert cli_main(["scenes", "export", SCENE, "--out", str(out), "--time", "-1"]) == 2
+    with pytest.raises(SystemExit) as bad:
+        cli_main(["scenes", "export", SCENE, "--out", str(out), "--time", "-1"])
+    assert bad.value.code == 2
+    assert "--time must be at least 0 s, got -1" in capsys.readouterr().err

@@ -2,11 +2,11 @@
 
 Every section is checked before anything is built: top-level keys against
 :class:`TrainConfig`, ``model`` against the agent's model dataclass
-(:class:`~havln_mj.agents.vln_cm.CMConfig` / :class:`~havln_mj.agents.vln_dt.DTConfig`, less
+(:class:`~havln_mj.agents.vln_cm.CMConfig` / :class:`~.DTConfig`, less
 the sizes the data set), ``model.text`` against the text encoder's arguments, ``features``
 against :class:`~havln_mj.agents.featurize.FeatureSpec` with ``features.view`` against
 :class:`~havln_mj.agents.views.ViewConfig` and ``features.encoder`` against
-:class:`~havln_mj.agents.vision.ViewEncoder`, and the splits against their two forms. A bad
+:class:`~.ViewEncoder`, and the splits against their two forms. A bad
 key raises :class:`~havln_mj.errors.InvalidArgumentError` naming the dotted key and the valid
 ones; a bad value raises the model's own error, before any rendering starts.
 """

@@ -46,7 +46,7 @@ class ViewEncoder(nn.Module):
     per side is meaningful.
 
     Attributes:
-        in_channels: 4 for RGB-D (:func:`prepare_views` with depth), 3 for RGB.
+        in_channels: 4 for RGB-D (:func:`~.prepare_views` with depth), 3 for RGB.
         out_dim: Feature size.
     """
 
@@ -127,7 +127,7 @@ class ViewEncoder(nn.Module):
         return cls(**cfg)
 
     def prepare(self, rgb: np.ndarray, depth: np.ndarray | None) -> Tensor:
-        """:func:`prepare_views` for this encoder's channels (depth is ignored by RGB models).
+        """:func:`~.prepare_views` for this encoder's channels (depth is ignored by RGB models).
 
         Raises:
             InvalidArgumentError: An RGB-D encoder got no depth.
@@ -155,7 +155,7 @@ def encode_views(
     """Features of many views, batch by batch, in eval mode without gradients.
 
     Input is prepared by the encoder's own ``prepare(rgb, depth)`` when it has one
-    (:class:`ViewEncoder`, :class:`ResNetFeatures`), else by :func:`prepare_views`. The
+    (:class:`~.ViewEncoder`, :class:`~.ResNetFeatures`), else by :func:`~.prepare_views`. The
     encoder's train/eval mode is restored afterwards.
 
     Args:

@@ -15,6 +15,7 @@ TARGET_KEYS = ("region", "person", "forward", "depth")
 # The person fraction is small and its soft-target gradient weak; weighted up so it is learnt
 # alongside the others (tuned on a synthetic set where all four are learnable).
 DEFAULT_LOSS_WEIGHTS = {"region": 1.0, "person": 10.0, "forward": 1.0, "depth": 1.0}
+"""Weights of the view encoder's pretraining loss terms."""
 
 
 class PretrainHeads(nn.Module):
@@ -69,7 +70,7 @@ def pretrain_loss(
     *,
     weights: Mapping[str, float] | None = None,
 ) -> tuple[Tensor, dict[str, float]]:
-    """The multi-task loss of :class:`PretrainHeads` predictions.
+    """The multi-task loss of :class:`~.PretrainHeads` predictions.
 
     Terms (each only when its target is given and has a valid entry in the batch):
     ``region`` cross-entropy over rows with a region ≥ 0 (-1 = unknown is ignored);

@@ -43,7 +43,7 @@ def _depth_metres(depth: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
 
 
 def prepare_views(rgb: np.ndarray, depth: np.ndarray | None) -> Tensor:
-    """Turns rendered views into :class:`ViewEncoder` input.
+    """Turns rendered views into :class:`~.ViewEncoder` input.
 
     RGB becomes ``x / 127.5 - 1`` (``[-1, 1]``). Depth (metres, 0 = no reading) is clipped to
     ``[0, DEPTH_MAX]`` (NaN and negative values count as no reading, +inf as ``DEPTH_MAX``) and
@@ -99,7 +99,7 @@ def device_of(module: nn.Module) -> torch.device:
 
 
 def prepare_for(encoder: nn.Module, rgb: np.ndarray, depth: np.ndarray | None) -> Tensor:
-    """The encoder's own ``prepare`` (else :func:`prepare_views`), on the encoder's device."""
+    """The encoder's own ``prepare`` (else :func:`~.prepare_views`), on the encoder's device."""
     prepare = getattr(encoder, "prepare", None)
     x = prepare(rgb, depth) if prepare is not None else prepare_views(rgb, depth)
     return x.to(device_of(encoder))

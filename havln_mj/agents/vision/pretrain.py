@@ -153,7 +153,7 @@ def pretrain_encoder(
     groups: np.ndarray | None = None,
     loss_weights: Mapping[str, float] | None = None,
 ) -> list[dict[str, float]]:
-    """Trains ``encoder`` (with throw-away :class:`PretrainHeads`) on simulator ground truth.
+    """Trains ``encoder`` (with throw-away :class:`~.PretrainHeads`) on simulator ground truth.
 
     AdamW with a linear warm-up then cosine decay per step, gradient norm clipped at 5.
     Mini-batches are gathered from the numpy arrays one at a time (memmaps work; nothing is
@@ -180,11 +180,11 @@ def pretrain_encoder(
         flip: Mirror a random half of each batch left-right (the depth grid with it).
         groups: Optional ``(N,)`` labels (e.g. scan or viewpoint ids) kept whole on one side of
             the split, so validation measures unseen places rather than re-rendered ones.
-        loss_weights: Per-term weights for :func:`pretrain_loss`.
+        loss_weights: Per-term weights for :func:`~.pretrain_loss`.
 
     Returns:
-        One dict per epoch: ``epoch``, ``seconds``, ``train_total`` and ``train_<term>`` (batch
-        means), and when there are validation rows ``val_region_acc`` (known regions only),
+        One dict per epoch, with ``epoch``, ``seconds``, ``train_total`` and ``train_<term>``
+        (batch means), and when there are validation rows ``val_region_acc`` (known regions only),
         ``val_person_mae``, ``val_forward_acc``, ``val_depth_mae`` (metres, cells with a
         reading), for the targets given.
 
@@ -237,7 +237,7 @@ def _rows(
     batch_size: int,
     lr: float,
 ) -> _Rows:
-    """The checked pretraining set; raises on what :func:`pretrain_encoder` rejects."""
+    """The checked pretraining set; raises on what :func:`~.pretrain_encoder` rejects."""
     rgb = check_rgb(rgb)
     n = len(rgb)
     if depth is not None and len(depth) != n:

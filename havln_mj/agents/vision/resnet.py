@@ -90,7 +90,7 @@ class ResNet(nn.Module):
 class ResNetFeatures(ResNet):
     """A ResNet whose ``forward`` gives the pooled features (HA3D's 2048-d view features).
 
-    Its state_dict keys are torchvision's. ``prepare`` applies :func:`prepare_imagenet`
+    Its state_dict keys are torchvision's. ``prepare`` applies :func:`~.prepare_imagenet`
     (depth ignored) at ``input_size``.
 
     Attributes:
@@ -165,7 +165,7 @@ def load_resnet152(
         input_size: ``(height, width)`` to resize views to before the network, or None.
 
     Returns:
-        A :class:`ResNetFeatures` in eval mode with gradients off (``requires_grad_(True)``
+        A :class:`~.ResNetFeatures` in eval mode with gradients off (``requires_grad_(True)``
         to fine-tune); ``out_dim`` 2048.
 
     Raises:

@@ -13,8 +13,8 @@ Each step ``t`` of a rollout gives three tokens, ``R_t, s_t, a_t``:
 A timestep embedding is added to all three. A causal transformer reads
 ``R_1, s_1, a_1, R_2, s_2, a_2, …`` and the action ``a_t`` is predicted from the output at
 ``s_t``, which has seen ``R_{≤t}``, ``s_{≤t}`` and ``a_{<t}``. Training is cross-entropy on
-the logged actions over windows of at most ``context`` steps (:func:`sample_windows`,
-:func:`dt_loss`); :class:`DTPolicy` acts one step at a time with the return-to-go bookkeeping
+the logged actions over windows of at most ``context`` steps (:func:`~.sample_windows`,
+:func:`~.dt_loss`); :class:`~.DTPolicy` acts one step at a time with the return-to-go bookkeeping
 ``R_{t+1} = R_t − r_t``.
 
 HA3D's VLN-DT (``reference/ha3d_facts.md`` §5, §9) is a 12-layer minGPT over ResNet-152 and

@@ -16,7 +16,7 @@ from havln_mj.errors import InvalidArgumentError
 from havln_mj.tasks.rewards import get_reward
 
 FUSIONS = ("attention", "concat")
-# The forward arguments, in order: a batch from :func:`sample_windows` holds these plus
+# The forward arguments, in order: a batch from :func:`~.sample_windows` holds these plus
 # ``targets`` and ``loss_mask``.
 FORWARD_KEYS = ("instruction", "obs", "actions", "rtg", "timesteps", "step_mask", "action_mask")
 
@@ -50,7 +50,7 @@ class DTConfig:
         target_return: Return-to-go the policy starts from.
         reward: Reward of :mod:`havln_mj.tasks.rewards` the returns are computed with.
         rtg_scale: Returns-to-go are divided by this before they enter the model, both in
-            :func:`sample_windows` and in :class:`DTPolicy`.
+            :func:`~.sample_windows` and in :class:`~.DTPolicy`.
     """
 
     vocab_size: int
@@ -127,7 +127,7 @@ class DecisionTransformer(nn.Module):
     """The VLN-DT network.
 
     Args:
-        cfg: Sizes (see :class:`DTConfig`).
+        cfg: Sizes (see :class:`~.DTConfig`).
     """
 
     def __init__(self, cfg: DTConfig) -> None:

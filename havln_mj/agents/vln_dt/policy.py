@@ -12,7 +12,7 @@ from havln_mj.errors import InvalidArgumentError
 
 
 class DTPolicy:
-    """Runs a trained :class:`DecisionTransformer` one step at a time.
+    """Runs a trained :class:`~.DecisionTransformer` one step at a time.
 
     The return-to-go starts at the target and drops by each reward received
     (``R_{t+1} = R_t − r_t``); the last ``cfg.context`` steps are fed to the model, with their

@@ -37,7 +37,7 @@ def returns_to_go(rewards: np.ndarray) -> np.ndarray:
 class DTDataset(Sequence[Demo]):
     """Demos with their returns-to-go cached per reward, for cheap window sampling.
 
-    A plain sequence of demos works with :func:`sample_windows` too, but then the returns of
+    A plain sequence of demos works with :func:`~.sample_windows` too, but then the returns of
     the sampled demos are recomputed on every call; wrap the training set once in this.
     Observations are not copied (the demos' arrays are sliced per window).
 
@@ -127,10 +127,10 @@ def sample_windows(
         rng: Source of the draws.
         reward: Reward name or function; ``cfg.reward`` if None.
         rtg_scale: Divisor of the returns-to-go; ``cfg.rtg_scale`` if None (keep them equal:
-            :class:`DTPolicy` divides by ``cfg.rtg_scale``).
+            :class:`~.DTPolicy` divides by ``cfg.rtg_scale``).
 
     Returns:
-        CPU tensors: the :meth:`DecisionTransformer.forward` arguments ``instruction (B, L)``,
+        CPU tensors, the :meth:`~.DecisionTransformer.forward` arguments ``instruction (B, L)``,
         ``obs (B, K, D)``, ``actions (B, K)``, ``rtg (B, K)``, ``timesteps (B, K)``,
         ``step_mask (B, K)``, ``action_mask (B, K, n_actions)``, plus ``targets (B, K)`` (the
         logged actions, 0 at padding) and ``loss_mask (B, K)`` (the real steps).
@@ -183,7 +183,7 @@ def dt_loss(model: DecisionTransformer, batch: dict[str, torch.Tensor]) -> torch
 
     Args:
         model: The network.
-        batch: From :func:`sample_windows` (on the model's device).
+        batch: From :func:`~.sample_windows` (on the model's device).
 
     Returns:
         Scalar loss.
