@@ -36,7 +36,7 @@ from havln_mj import groups
 from havln_mj.render.camera import Camera
 from havln_mj.scene.matterport.categories import MPCAT40_COLOURS, PERSON, LabelMesh
 
-LABELS = 4
+LABELS = groups.LABELS
 """Geom group of the label geoms (hidden from RGB cameras, drawn by the segmentation pass)."""
 
 PERSON_INSTANCE_BASE = 1 << 16

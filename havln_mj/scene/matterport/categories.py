@@ -49,8 +49,6 @@ MPCAT40_COLOURS = (
 )  # fmt: skip
 """mpcat40's display colour of each category (hex RGB), from its table."""
 
-SEMANTICS = "semantics.json"
-"""File name of a scan folder's part labels."""
 
 _INDEX = {name: k for k, name in enumerate(MPCAT40)}
 

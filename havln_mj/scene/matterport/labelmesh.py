@@ -25,10 +25,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from havln_mj.errors import CorruptMeshError
-from havln_mj.scene.matterport.categories import SEMANTICS, LabelMesh, SceneLabels
+from havln_mj.scene.matterport.categories import LabelMesh, SceneLabels
 from havln_mj.scene.matterport.house import read_object_classes
 from havln_mj.scene.matterport.layout import label_files
 from havln_mj.scene.mesh import MeshPart
+from havln_mj.scene.scanfolder import SEMANTICS
 
 if TYPE_CHECKING:
     from havln_mj.scene.scan import Scan

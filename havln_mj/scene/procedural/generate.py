@@ -9,7 +9,6 @@ import numpy as np
 from havln_mj.cache import atomic_write_json
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.scene.connectivity import Connectivity, write_connectivity
-from havln_mj.scene.matterport.categories import SEMANTICS
 from havln_mj.scene.mesh import write_glb
 from havln_mj.scene.procedural.build import house_boxes
 from havln_mj.scene.procedural.furnish import Item, door_keepouts, furnish_room, inner_rect
@@ -20,7 +19,7 @@ from havln_mj.scene.procedural.materials import library_digest
 from havln_mj.scene.procedural.recipe import Recipe, load_recipe
 from havln_mj.scene.procedural.viewpoints import place_viewpoints, room_is_passable
 from havln_mj.scene.regions import Level, Region, Regions, SceneObject
-from havln_mj.scene.scanfolder import BOXES, CONNECTIVITY, MESH_GLB, META, REGIONS
+from havln_mj.scene.scanfolder import BOXES, CONNECTIVITY, MESH_GLB, META, REGIONS, SEMANTICS
 
 # Bump when generator code changes what a seed produces: cached scans are rebuilt.
 GENERATOR_VERSION = 2
