@@ -1,7 +1,7 @@
 """What a run records: filmed walks, per-episode reports, the best frame, the map, staging.
 
 :class:`Recording` films a simulator's walks through its frame pipeline
-(:meth:`~havln_mj.sim.simulator.Simulator.set_film`), keeps the body's track and the view
+(:meth:`~havln_mj.sim.extensions.SimulatorExtensions.set_film`), keeps the body's track and the view
 showing people best, and reports each episode from the states the simulator published (what
 the body really did: where it stood, whether it arrived or fell, whom it came near).
 :func:`staged_outputs` makes a run's folder change all at once, or not at all.

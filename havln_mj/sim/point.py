@@ -63,7 +63,7 @@ class Stage:
         """The view from the rig at ``pose`` (or from ``camera``) at simulated time ``t``.
 
         ``skybox``: ``(skybox, rotation)`` of the viewpoint the rig stands at, to show its
-        photographs (see :meth:`Frames.render`).
+        photographs (see :meth:`~havln_mj.sim.frame.Frames.render`).
         """
         self.place(pose)
         return self.frames.render(self.data, t, camera or CAMERA, settings, skybox=skybox)

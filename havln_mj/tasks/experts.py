@@ -224,7 +224,7 @@ class HumanAwareExpert:
         weighted: Shortest by length (True) or by number of edges (HA3D).
         distance: ``"horizontal"`` (pelvis positions on the viewpoint's storey, as the strict
             collision rule) or ``"camera_3d"`` (HA3D: 3-D between viewpoint cameras and the
-            simulator's :meth:`~havln_mj.sim.simulator.Simulator.collision_points`).
+            simulator's :meth:`~havln_mj.sim.extensions.SimulatorExtensions.collision_points`).
         max_waits: Waits per episode before ``after_waits`` (None: no bound).
         after_waits: ``"walk"`` (on, ignoring people) or ``"stop"``.
         max_steps: Default cap on actions.

@@ -12,7 +12,7 @@ simulator state; the gymnasium environments turn the fields into ``spaces`` and 
 ``human_mask``      ``H×W uint8``, 1 where a person is seen (only with ``human_mask=True``)
 ``semantic``        ``H×W uint8`` mpcat40 class, 42 a person (only with ``segmentation=True``)
 ``instance``        ``H×W int32`` object instance, people from 65536 (only with
-                   ``segmentation=True``)
+                    ``segmentation=True``)
 ``instruction``     ``L int64`` token ids of the vocabulary, 0-padded (``L`` =
                     ``instruction_length``)
 ``heading``         ``(1,) float32`` radians in [0, 2π), 0 facing +y, right positive

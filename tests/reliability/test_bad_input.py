@@ -14,6 +14,7 @@ import mujoco
 import pytest
 
 from havln_mj import cli
+from havln_mj.commands import scenes as scene_commands
 from havln_mj.errors import InvalidArgumentError, MalformedDataError, RenderingUnavailableError
 from havln_mj.scene.scan import load_scan
 from havln_mj.sim.simulator import Simulator
@@ -110,9 +111,9 @@ def _built(scene: str, *args) -> dict:
 def test_scenes_build_starts_no_more_workers_than_scenes_and_cpus(monkeypatch, capsys):
     asked: list[int] = []
     monkeypatch.setattr(
-        cli, "ProcessPoolExecutor", lambda max_workers: _InlinePool(max_workers, asked)
+        scene_commands, "ProcessPoolExecutor", lambda max_workers: _InlinePool(max_workers, asked)
     )
-    monkeypatch.setattr(cli, "build_scene", _built)
+    monkeypatch.setattr(scene_commands, "build_scene", _built)
     assert cli.main(["scenes", "build", "proc-0", "--workers", "100000"]) == 0
     assert asked == [1]
     assert "using 1 worker process, not 100000" in capsys.readouterr().err
@@ -125,9 +126,9 @@ def test_a_crash_in_one_scene_does_not_end_the_batch(monkeypatch, capsys):
         return _built(scene)
 
     monkeypatch.setattr(
-        cli, "ProcessPoolExecutor", lambda max_workers: _InlinePool(max_workers, [])
+        scene_commands, "ProcessPoolExecutor", lambda max_workers: _InlinePool(max_workers, [])
     )
-    monkeypatch.setattr(cli, "build_scene", build)
+    monkeypatch.setattr(scene_commands, "build_scene", build)
     assert cli.main(["scenes", "build", "proc-0", "proc-1", "proc-2"]) == 1
     out = capsys.readouterr().out
     assert "proc-1: FAILED unexpectedly (ZeroDivisionError: a bug)" in out
