@@ -15,7 +15,8 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from havln_mj.sim.body import Body, BodyKind, Film, Outcome
-from havln_mj.sim.crowd import NO_PROXIMITY, Crowd, knots_proximity, sample_knots
+from havln_mj.frames import wrap_heading
+from havln_mj.sim.crowd import Crowd, batch_proximity, sample_knots
 from havln_mj.sim.frame import View
 from havln_mj.sim.images import ImageFormat
 from havln_mj.sim.navigation import NavTable
@@ -111,10 +112,12 @@ class Batch:
             el.heading, el.elevation, _ = self.view(h, e)
             elements.append(el)
         self.elements = elements
+        started = []
         for i, (el, start) in enumerate(zip(elements, starts, strict=True)):
             el.film = self._new_film(i, el)
             outcome = el.body.start(start[2], el.heading, el.elevation, 0.0)
-            self.finish(i, outcome, el.elevation, starting=True)
+            started.append((el, outcome, None, el.elevation, 0))
+        self._publish(started, starting=True)
 
     def _new_film(self, i: int, el: Element) -> Film | None:
         if self.film is None or not self.cfg.rendering:
@@ -135,64 +138,86 @@ class Batch:
     def apply(
         self, actions: list[tuple[int, int, float, float]], waits: Sequence[float] | None = None
     ) -> None:
-        """Move, then rotate, for each (element, index, dh, de); ``waits`` override WAIT_S."""
-        discretized, limits = self.cfg.discretized, self.cfg.elevation_limits
+        """Move, then rotate, for each (element, index, dh, de); ``waits`` override WAIT_S.
+
+        The collision signal of the whole batch is computed in one call once every element
+        has moved.
+        """
+        cfg = self.cfg
+        discretized, (lo, hi) = cfg.discretized, cfg.elevation_limits
+        elements, moved = self.elements, []
         for n, (i, k, dh, de) in enumerate(actions):
-            el = self.elements[i]
+            el = elements[i]
             if discretized:
                 dh = discrete_delta(dh, HEADING_INCREMENT)
                 de = discrete_delta(de, ELEVATION_INCREMENT)
-                heading, elevation, _ = discrete_view(el.heading + dh, el.elevation + de)
+                heading, elevation, index = discrete_view(el.heading + dh, el.elevation + de)
             else:
-                heading, elevation, _ = continuous_view(el.heading + dh, el.elevation + de, limits)
+                heading = wrap_heading(el.heading + dh)
+                elevation, index = min(max(el.elevation + de, lo), hi), 0
             target = el.navigable[k].viewpointId
             wait_s = WAIT_S if waits is None else waits[n]
             outcome = el.body.move(target, heading, elevation, el.time, wait_s, el.film)
-            self.finish(i, outcome, elevation)
+            moved.append((el, outcome, heading, elevation, index))
+        self._publish(moved)
 
     def robot(self, actions: Sequence[str]) -> None:
         """A robot action per element (``"stop"`` leaves it alone)."""
-        for i, (el, act) in enumerate(zip(self.elements, actions, strict=True)):
+        moved = []
+        for el, act in zip(self.elements, actions, strict=True):
             if act != "stop":
-                self.finish(i, el.body.robot_action(act, el.time, el.film), el.elevation)
+                outcome = el.body.robot_action(act, el.time, el.film)
+                moved.append((el, outcome, None, el.elevation, 0))
+        self._publish(moved)
 
-    def finish(self, i: int, outcome: Outcome, elevation: float, starting: bool = False) -> None:
-        """Advances element ``i``'s clock and view by ``outcome`` and publishes its state."""
-        el = self.elements[i]
-        if not starting:
-            el.time += outcome.duration
-            el.step += 1
-        el.heading, el.elevation, el.view_index = self.view(outcome.heading, elevation)
-        el.navigable = el.table.candidates(
-            outcome.viewpoint, el.heading, el.elevation, self.cfg.cos_half_hfov()
+    def _publish(self, moved: list[tuple], starting: bool = False) -> None:
+        """Advances clocks and views by each ``(element, outcome, heading asked, elevation,
+        view index)`` and publishes the states (a heading of None: apply the view rules)."""
+        if not moved:
+            return
+        cfg = self.cfg
+        cos_fov = cfg.cos_half_hfov()
+        contacts = batch_proximity(
+            [(el.crowd, outcome.knots) for el, outcome, *_ in moved], self.collision_distance
         )
-        contact = NO_PROXIMITY
-        if len(el.crowd):
-            contact = knots_proximity(el.crowd, outcome.knots, self.collision_distance)
-        if starting and el.film is not None:
-            el.film.tick(el.time)
-        rgb, depth, mask = self._images(el)
-        el.state = SimState(
-            el.table.scan_id,
-            el.step,
-            rgb,
-            depth,
-            el.navigable[0],
-            el.heading,
-            el.elevation,
-            el.view_index,
-            el.navigable,
-            el.time,
-            int(contact.crushed),
-            contact.people,
-            contact.min_distance,
-            mask,
-            el.body.pose(),
-            outcome.fell,
-            outcome.contacts,
-            outcome.arrived,
-            outcome.diverged,
-        )
+        blank = None if cfg.rendering else self.format.blank(cfg.width, cfg.height)
+        for (el, outcome, heading, elevation, index), contact in zip(moved, contacts):  # noqa: B905
+            if not starting:
+                el.time += outcome.duration
+                el.step += 1
+            if heading is None or outcome.heading != heading:
+                heading, elevation, index = self.view(outcome.heading, elevation)
+            el.heading, el.elevation, el.view_index = heading, elevation, index
+            el.navigable = navigable = el.table.candidates(
+                outcome.viewpoint, heading, elevation, cos_fov
+            )
+            if blank is None:
+                if starting and el.film is not None:
+                    el.film.tick(el.time)
+                rgb, depth, mask = self._images(el)
+            else:
+                (rgb, depth), mask = blank, None
+            el.state = SimState(
+                el.table.scan_id,
+                el.step,
+                rgb,
+                depth,
+                navigable[0],
+                heading,
+                elevation,
+                index,
+                navigable,
+                el.time,
+                int(contact.crushed),
+                contact.people,
+                contact.min_distance,
+                mask,
+                el.body.pose(),
+                outcome.fell,
+                outcome.contacts,
+                outcome.arrived,
+                outcome.diverged,
+            )
 
     def _images(self, el: Element) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         cfg = self.cfg

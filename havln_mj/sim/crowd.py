@@ -17,11 +17,9 @@ distance reported is exact below ``NEAR_M`` and ``inf`` above.
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 import numpy as np
 
@@ -104,8 +102,7 @@ class _NoCrowd:
 NO_CROWD: Crowd = _NoCrowd()
 
 
-@dataclass(frozen=True)
-class Proximity:
+class Proximity(NamedTuple):
     """How close an action brought the agent to people.
 
     Attributes:
@@ -123,6 +120,19 @@ class Proximity:
 NO_PROXIMITY = Proximity(False, (), math.inf)
 
 
+_STEPS = np.arange(4096, dtype=float)  # read-only sample indices for sample times
+
+
+def _linspace(t0: float, t1: float, n: int) -> np.ndarray:
+    """``numpy.linspace(t0, t1, n)`` (same values) without its argument handling."""
+    if n > len(_STEPS):
+        return np.linspace(t0, t1, n)
+    times = _STEPS[:n] * ((t1 - t0) / (n - 1))
+    times += t0
+    times[-1] = t1
+    return times
+
+
 def sample_knots(knots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Times and positions along a track given by its knots, at :data:`SAMPLE_HZ` or faster.
 
@@ -138,18 +148,30 @@ def sample_knots(knots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if len(knots) == 1 or t[-1] <= t[0]:
         return t[-1:], knots[-1:, 1:]
     n = max(2, math.ceil((t[-1] - t[0]) * SAMPLE_HZ) + 1)
-    times = np.union1d(t, np.linspace(t[0], t[-1], n))
+    times = np.union1d(t, _linspace(float(t[0]), float(t[-1]), n))
     positions = np.column_stack([np.interp(times, t, knots[:, i]) for i in (1, 2, 3)])
     return times, positions
 
 
 def _near(crowd: Crowd, path: np.ndarray, reach: float) -> list[int]:
     """Indices of people whose pelvis track comes within ``reach`` of the polyline ``path``."""
+    return _near_rows(crowd, [(0.0, float(p[0]), float(p[1])) for p in path], reach)
+
+
+def _near_rows(crowd: Crowd, rows: Sequence[Sequence[float]], reach: float) -> list[int]:
+    """As :func:`_near`, for the polyline through knots ``(t, x, y, ...)``."""
     centres, radii = crowd.footprint()
-    legs = [
-        (float(a[0]), float(a[1]), float(b[0]) - float(a[0]), float(b[1]) - float(a[1]))
-        for a, b in itertools.pairwise(path)
-    ] or [(float(path[0][0]), float(path[0][1]), 0.0, 0.0)]
+    ax, ay = rows[0][1], rows[0][2]
+    legs = []
+    for row in rows[1:]:
+        bx, by = row[1], row[2]
+        if bx != ax or by != ay:
+            legs.append((ax, ay, bx - ax, by - ay))
+            ax, ay = bx, by
+    if not legs:
+        legs.append((ax, ay, 0.0, 0.0))
+    if len(radii) > _VECTOR_NEAR:
+        return _near_vector(centres, radii, legs, reach)
     out = []
     # Plain floats: a handful of people is faster this way than through numpy.
     for k, ((cx, cy), r) in enumerate(zip(centres.tolist(), radii.tolist(), strict=True)):
@@ -161,6 +183,19 @@ def _near(crowd: Crowd, path: np.ndarray, reach: float) -> list[int]:
                 out.append(k)
                 break
     return out
+
+
+_VECTOR_NEAR = 8  # more people than this are pruned with numpy
+
+
+def _near_vector(centres: np.ndarray, radii: np.ndarray, legs: list, reach: float) -> list[int]:
+    legs_a = np.asarray(legs, float)  # (L, 4): ax, ay, dx, dy
+    rel = centres[:, None, :] - legs_a[None, :, :2]  # (P, L, 2)
+    d = legs_a[:, 2:]
+    length2 = (d * d).sum(axis=1)
+    t = np.clip((rel * d).sum(axis=2) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
+    gap = np.hypot(*(rel - t[..., None] * d).transpose(2, 0, 1)).min(axis=1) - radii
+    return np.flatnonzero(gap <= reach).tolist()
 
 
 def knots_proximity(
@@ -176,14 +211,76 @@ def knots_proximity(
             row: an instant, e.g. an episode's start state).
         distance: Collision threshold (metres, horizontal).
     """
-    if len(crowd) == 0:
-        return NO_PROXIMITY
-    knots = np.asarray(knots, float).reshape(-1, 4)
-    near = _near(crowd, knots[:, 1:], max(NEAR_M, distance))
-    if not near:
-        return NO_PROXIMITY
-    times, positions = sample_knots(knots)
-    return track_proximity(crowd, times, positions, distance, near)
+    return batch_proximity([(crowd, knots)], distance)[0]
+
+
+def batch_proximity(
+    tracks: Sequence[tuple[Crowd, np.ndarray | Sequence[Sequence[float]]]],
+    distance: float = COLLISION_DISTANCE,
+) -> list[Proximity]:
+    """The collision signal of several tracks (a batch's actions) at once.
+
+    Each ``(crowd, knots)`` is answered as :func:`knots_proximity` answers it. Tracks among
+    the same people whose crowd offers a tabulated pelvis track (``pelvis_table()``, see
+    :mod:`havln_mj.humans.tracks`) are sampled together in one vectorised pass; other crowds
+    are asked for positions track by track.
+    """
+    out = [NO_PROXIMITY] * len(tracks)
+    reach = max(NEAR_M, distance)
+    groups: dict[int, tuple[Crowd, list]] = {}
+    for slot, (crowd, knots) in enumerate(tracks):
+        if not len(crowd):
+            continue
+        rows = knots if isinstance(knots, tuple | list) else np.asarray(knots, float).tolist()
+        near = _near_rows(crowd, rows, reach)
+        if near:
+            groups.setdefault(id(crowd), (crowd, []))[1].append((slot, rows, near))
+    for crowd, items in groups.values():
+        table = getattr(crowd, "pelvis_table", None)
+        if table is None:
+            for slot, rows, near in items:
+                times, positions = sample_knots(np.asarray(rows, float).reshape(-1, 4))
+                out[slot] = track_proximity(crowd, times, positions, distance, near)
+        else:
+            _tabulated(table(), items, distance, out)
+    return out
+
+
+def _samples(rows: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
+    """Sample times of a track (as :func:`sample_knots`, unordered) and its ``x + iy`` then."""
+    t0, t1 = rows[0][0], rows[-1][0]
+    if len(rows) == 1 or t1 <= t0:
+        last = rows[-1]
+        return np.array([t1]), np.array([complex(last[1], last[2])])
+    times = _linspace(t0, t1, max(2, math.ceil((t1 - t0) * SAMPLE_HZ) + 1))
+    if len(rows) > 2:  # inner knots are samples too
+        times = np.concatenate([times, [r[0] for r in rows[1:-1]]])
+    xy = np.interp(times, [r[0] for r in rows], [complex(r[1], r[2]) for r in rows])
+    return times, xy
+
+
+def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> None:
+    """The signal of ``items`` ``(slot, knots, near)`` among one crowd, read from its table.
+
+    Every person is measured (one pass for all tracks): people the pruning left out are
+    farther than :data:`NEAR_M`, so they change neither the flags nor the reported distance.
+    """
+    if len(items) == 1:
+        times, agent = _samples(items[0][1])
+        starts = None
+    else:
+        parts = [_samples(rows) for _, rows, _ in items]
+        times = np.concatenate([p[0] for p in parts])
+        agent = np.concatenate([p[1] for p in parts])
+        starts = np.cumsum([0] + [len(p[0]) for p in parts[:-1]])
+    gap = table.xy(times)
+    gap -= agent[:, None]
+    d = np.abs(gap)
+    closest = [d.min(axis=0).tolist()] if starts is None else np.minimum.reduceat(d, starts).tolist()
+    for (slot, _, _), row in zip(items, closest, strict=True):
+        hit = tuple(k for k, v in enumerate(row) if v <= distance)
+        smallest = min(row)
+        out[slot] = Proximity(bool(hit), hit, smallest if smallest < NEAR_M else math.inf)
 
 
 def track_proximity(
