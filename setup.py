@@ -21,6 +21,7 @@ class BuildWithContent(build_py):
     """``build_py`` that also copies the content folders into ``havln_mj/_data``."""
 
     def run(self) -> None:
+        """Builds the package, then copies the content (not for editable installs)."""
         super().run()
         if self.editable_mode:
             return

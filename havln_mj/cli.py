@@ -21,7 +21,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from havln_mj.annotator import command as annotate_command
-from havln_mj.errors import HavlnError
+from havln_mj.errors import HavlnError, InvalidArgumentError
 from havln_mj.sim.prebuild import build_scene
 from havln_mj.sim.world import COLLISION_MODES
 
@@ -30,13 +30,13 @@ def _scene_ids(args: argparse.Namespace) -> list[str]:
     ids = list(args.ids)
     if args.all_connectivity:
         if args.connectivity_dir is None:
-            raise HavlnError("--all-connectivity needs --connectivity-dir")
+            raise InvalidArgumentError("--all-connectivity needs --connectivity-dir")
         ids += sorted(
             p.name[: -len("_connectivity.json")]
             for p in args.connectivity_dir.glob("*_connectivity.json")
         )
     if not ids:
-        raise HavlnError("no scene ids given (e.g. proc-0 proc-1, or --all-connectivity)")
+        raise InvalidArgumentError("no scene ids given (e.g. proc-0 proc-1, or --all-connectivity)")
     return ids
 
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from havln_mj.errors import HavlnError
+from havln_mj.errors import OutputError
 from havln_mj.frames import heading_to, wrap_angle
 from havln_mj.render.video import VideoWriter
 from havln_mj.sim.crowd import COLLISION_DISTANCE
@@ -82,7 +82,7 @@ def staged_outputs(out: Path) -> Iterator[_Stage]:
         stage = _Stage(out)
         stage.path.mkdir()
     except OSError as exc:
-        raise HavlnError(f"cannot write the output folder {out}: {exc.strerror or exc}") from None
+        raise OutputError(f"cannot write the output folder {out}: {exc.strerror or exc}") from None
     try:
         yield stage
     finally:

@@ -64,3 +64,36 @@ def blob_smpl():
         weights=np.vstack(weights),
         faces=np.vstack(faces),
     )
+
+
+class StandingPeople:
+    """People standing still at fixed pelvis points: the Crowd protocol, nothing drawn."""
+
+    def __init__(self, points):
+        import numpy as np
+
+        self.points = np.asarray(points, float).reshape(-1, 3)
+        self.shapes, self.skins = [], []
+
+    def __len__(self):
+        return len(self.points)
+
+    def positions(self, times, people=None):
+        import numpy as np
+
+        points = self.points if people is None else self.points[people]
+        return np.broadcast_to(points, (len(np.atleast_1d(times)), *points.shape)).copy()
+
+    def footprint(self):
+        import numpy as np
+
+        return self.points[:, :2], np.zeros(len(self.points))
+
+    def states(self, t):
+        return [tuple(p) for p in self.points]
+
+
+@pytest.fixture(scope="session")
+def standing():
+    """Makes people standing still at given pelvis points (see :class:`StandingPeople`)."""
+    return StandingPeople

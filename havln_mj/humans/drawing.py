@@ -63,7 +63,7 @@ class PeoplePoser:
         crowd = drawing.crowd
         self.crowd = crowd
         self.model = model
-        self._joints = PeopleWriter(model, len(crowd))
+        self._joints = PeopleWriter(model, len(crowd.shapes))  # the people drawn
         skins = crowd.skins
         smpl = [k for k, s in enumerate(skins) if s is not None]
         self._smpl = SkinWriter(model, smpl) if smpl else None
@@ -82,8 +82,8 @@ class PeoplePoser:
         Returns:
             Ids of the meshes whose vertices changed: upload each to every renderer.
         """
-        if len(self.crowd) == 0:
-            return []
+        if not self._joints.n_people:
+            return []  # nobody drawn
         positions, quats = self.crowd.pose(t)
         self._joints.write(data, positions, quats)
         changed = []

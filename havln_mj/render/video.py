@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from havln_mj.errors import HavlnError, InvalidArgumentError
+from havln_mj.errors import ClosedError, InvalidArgumentError, OutputError
 
 CODEC = "libx264"
 PIXEL_FORMAT = "yuv420p"
@@ -100,7 +100,7 @@ class VideoWriter:
             self._encoder.send(None)  # starts ffmpeg
         except (OSError, RuntimeError) as exc:
             self._encoder = None
-            raise HavlnError(f"{self.path}: cannot start the H.264 encoder ({exc})") from None
+            raise OutputError(f"{self.path}: cannot start the H.264 encoder ({exc})") from None
 
     @property
     def closed(self) -> bool:
@@ -118,7 +118,7 @@ class VideoWriter:
             HavlnError: The writer is closed, or the encoder stopped (naming the path).
         """
         if self._encoder is None:
-            raise HavlnError(f"{self.path}: write() after close()")
+            raise ClosedError(f"{self.path}: write() after close()")
         frame = np.asarray(rgb)
         want = (self.height, self.width, 3)
         if frame.shape != want or frame.dtype != np.uint8:
@@ -133,7 +133,7 @@ class VideoWriter:
             self._encoder.send(np.ascontiguousarray(frame))
         except (OSError, RuntimeError) as exc:
             self._abort()
-            raise HavlnError(f"{self.path}: the H.264 encoder stopped ({exc})") from None
+            raise OutputError(f"{self.path}: the H.264 encoder stopped ({exc})") from None
         self.frames += 1
 
     def close(self) -> None:
@@ -147,13 +147,13 @@ class VideoWriter:
             return
         if self.frames == 0:
             self._abort()
-            raise HavlnError(f"{self.path}: no frames were written; no video was made")
+            raise OutputError(f"{self.path}: no frames were written; no video was made")
         encoder, self._encoder = self._encoder, None
         try:
             encoder.close()
         except (OSError, RuntimeError) as exc:
             self._partial.unlink(missing_ok=True)
-            raise HavlnError(f"{self.path}: the H.264 encoder failed to finish ({exc})") from None
+            raise OutputError(f"{self.path}: the H.264 encoder failed to finish ({exc})") from None
         os.replace(self._partial, self.path)
 
     def _abort(self) -> None:
@@ -204,7 +204,7 @@ def probe(path: Path | str) -> dict:
         meta = next(reader)
         frames = sum(1 for _ in reader)
     except (OSError, RuntimeError, StopIteration) as exc:
-        raise HavlnError(f"{path}: ffmpeg cannot read this video ({exc})") from None
+        raise OutputError(f"{path}: ffmpeg cannot read this video ({exc})") from None
     codec = str(meta.get("codec", "")).split()[0]
     return {
         "codec": codec,

@@ -2,8 +2,8 @@
 
 Agent code written for MatterSim runs with ``import havln_mj as MatterSim``: the same
 setters, batched list arguments, ``initialize``/``newEpisode``/``makeAction``/``getState``,
-navigable-location rules, discretised views and exception types (see
-``reference/mattersim_api.md`` for the rules). On top of MatterSim:
+navigable-location rules, discretised views and exception types (those of the
+Matterport3DSimulator's ``MatterSim.Simulator``). On top of MatterSim:
 
 * **People** (HA3D): with ``Simulator(humans=True)`` every scan is populated (see
   :mod:`havln_mj.sim.people`); people move with simulated time and are drawn in RGB, depth and

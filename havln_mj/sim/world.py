@@ -247,6 +247,7 @@ def build_world(
         The compiled world.
     """
     t0 = time.perf_counter()
+    options = options or WorldOptions()
     spec, mode, n = world_spec(scan, options)
     add_people(spec, list(people), skins, style=options.people_style)
     model = spec.compile()

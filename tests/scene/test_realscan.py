@@ -126,7 +126,7 @@ def test_a_proxy_draws_a_flight_for_a_steep_edge_the_graph_cannot_route(shared_d
     assert path_fault(points, scan.boxes, ProxyParams()) is None
 
 
-def test_a_real_scan_moves_the_same_with_rendering_on_and_off(shared_data):
+def test_a_real_scan_moves_the_same_with_rendering_on_and_off(shared_data, standing):
     # D7G3Y4RVNrH has an edge its proxy walks along a flight; the point body walks every edge
     # straight whether the proxy is built (rendering on) or not, so durations and the
     # collision signal cannot depend on the switch.
@@ -138,7 +138,7 @@ def test_a_real_scan_moves_the_same_with_rendering_on_and_off(shared_data):
 
     def crowd(scan_id, graph, rng):
         offsets = np.array([[0.3, 0.2, 0.0], [2.5, 0.0, -1.0]])
-        return _Standing(np.stack([mid, g.position(a)]) + offsets)
+        return standing(np.stack([mid, g.position(a)]) + offsets)
 
     runs = []
     for rendering in (False, True):
@@ -186,27 +186,3 @@ def test_proxy_takes_region_labels_from_a_house_file_without_mesh(tmp_path):
     assert scan.kind == "graph proxy"
     assert [r.label for r in scan.regions.regions] == [r.label for r in house.regions.regions]
     assert scan.regions.viewpoint_region == house.regions.viewpoint_region
-
-
-class _Standing:
-    """People standing still at fixed pelvis points."""
-
-    def __init__(self, points):
-        self.points = np.asarray(points, float)
-        self.shapes, self.skins = [], []
-
-    def __len__(self):
-        return len(self.points)
-
-    def positions(self, times, people=None):
-        points = self.points if people is None else self.points[people]
-        return np.broadcast_to(points, (len(times), *points.shape)).copy()
-
-    def footprint(self):
-        return self.points[:, :2], np.zeros(len(self.points))
-
-    def pose(self, t):
-        return np.zeros((0, 24, 3)), np.zeros((0, 24, 4))
-
-    def skin_vertices(self, t):
-        return {}

@@ -161,41 +161,13 @@ def _started(seed: int):
     return sim.getState()
 
 
-class _Standing:
-    """People standing still at fixed points."""
-
-    def __init__(self, points):
-        self.points = np.asarray(points, float)
-
-    def __len__(self):
-        return len(self.points)
-
-    @property
-    def shapes(self):
-        return []
-
-    @property
-    def skins(self):
-        return []
-
-    def positions(self, times, people=None):
-        points = self.points if people is None else self.points[people]
-        return np.broadcast_to(points, (len(times), *points.shape)).copy()
-
-    def footprint(self):
-        return self.points[:, :2], np.zeros(len(self.points))
-
-    def states(self, t):
-        return [tuple(p) for p in self.points]
-
-
-def test_is_crushed_catches_a_person_passed_mid_action(graph):
+def test_is_crushed_catches_a_person_passed_mid_action(graph, standing):
     # Find an edge longer than 2.5 m, and stand a person beside its middle.
     a, b = next((u, v) for u, v, d in graph.edges() if d > 2.5)
     pa, pb = graph.position(a), graph.position(b)
     side = np.array([pa[1] - pb[1], pb[0] - pa[0], 0.0])
     person = (pa + pb) / 2 + 0.4 * side / np.linalg.norm(side) - [0.0, 0.0, 0.5]
-    sim = _sim(humans=lambda scan, g, rng: _Standing([person]))
+    sim = _sim(humans=lambda scan, g, rng: standing([person]))
     sim.newEpisode([SCAN], [a], [heading_to(pa, pb)], [0.0])
     start = sim.getState()[0]
     assert start.isCrushed == 0  # both ends are more than 1 m away
@@ -241,14 +213,14 @@ def routed(graph, monkeypatch, request):
     return a, b, c, stop
 
 
-def test_the_point_body_walks_a_routed_edge_straight(graph, routed):
+def test_the_point_body_walks_a_routed_edge_straight(graph, routed, standing):
     # Routes are for bodies that walk the building (the GO1); the point body is MatterSim's
     # agent, and moves straight between cameras whatever the scan stores.
     a, b, c, _ = routed
     pa, pb = graph.position(a), graph.position(b)
     person = graph.position(c) - [0.0, 0.0, 1.0]  # on the route, off the straight line
     for rendering in (False, True):
-        sim = _sim(speed=0.5, rendering=rendering, humans=lambda s, g, r: _Standing([person]))
+        sim = _sim(speed=0.5, rendering=rendering, humans=lambda s, g, r: standing([person]))
         sim.newEpisode([SCAN], [a], [heading_to(pa, pb)], [0.0])
         ids = [v.viewpointId for v in sim.getState()[0].navigableLocations]
         sim.makeAction([ids.index(b)], [0.0], [0.0])
@@ -259,10 +231,10 @@ def test_the_point_body_walks_a_routed_edge_straight(graph, routed):
         sim.close()
 
 
-def test_an_edge_walked_straight_misses_a_person_off_its_line(graph):
+def test_an_edge_walked_straight_misses_a_person_off_its_line(graph, standing):
     a, b, c = _detour(graph)  # no route stored: a-b is walked straight
     person = graph.position(c) - [0.0, 0.0, 1.0]
-    sim = _sim(humans=lambda scan, g, rng: _Standing([person]))
+    sim = _sim(humans=lambda scan, g, rng: standing([person]))
     pa, pb = graph.position(a), graph.position(b)
     sim.newEpisode([SCAN], [a], [heading_to(pa, pb)], [0.0])
     ids = [v.viewpointId for v in sim.getState()[0].navigableLocations]
@@ -321,7 +293,7 @@ def test_rendering_off_does_no_gl_work(monkeypatch):
     def fail(*args, **kwargs):
         raise AssertionError("a world was built with rendering off")
 
-    monkeypatch.setattr(point, "_Stage", fail)
+    monkeypatch.setattr(point, "Stage", fail)
     sim = _sim()
     sim.newRandomEpisode([SCAN])
     sim.makeAction([0], [0.3], [0.0])
