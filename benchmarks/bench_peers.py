@@ -268,16 +268,15 @@ def run_workload(name: str, args, tmp: Path, peer: Path | None) -> dict:
     ):
         if a in out and b in out:
             ratios[f"{a}/{b}"] = round(out[a]["steps_per_s"] / out[b]["steps_per_s"], 3)
-            ratios[f"{a}/{b}_cpu"] = round(
-                out[a]["steps_per_cpu_s"] / out[b]["steps_per_cpu_s"], 3
-            )
+            ratios[f"{a}/{b}_cpu"] = round(out[a]["steps_per_cpu_s"] / out[b]["steps_per_cpu_s"], 3)
     out["ratios"] = ratios
     return out
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--data", type=Path, default=Path(os.environ.get("HAVLN_SHARED_DATA", SHARED / "data")))
+    data = Path(os.environ.get("HAVLN_SHARED_DATA", SHARED / "data"))
+    ap.add_argument("--data", type=Path, default=data)
     ap.add_argument("--peers", type=Path, default=SHARED / "peers")
     ap.add_argument("--build", type=Path, default=None, help="where the peer is (built)")
     ap.add_argument("--seconds", type=float, default=3.0, help="timed seconds per run")
@@ -300,7 +299,8 @@ def main() -> int:
         return 1
     from common import machine
 
-    build = args.build or Path(os.environ.get("HAVLN_CACHE", Path.home() / ".cache/havln_mj")) / "peers"
+    cache = Path(os.environ.get("HAVLN_CACHE", Path.home() / ".cache" / "havln_mj"))
+    build = args.build or cache / "peers"
     peer, how = find_peer(build, args.peers)
     if peer is None:
         print(f"MatterSim peer skipped: {how}", file=sys.stderr)

@@ -58,28 +58,34 @@ class PelvisTable:
         self.size = n
         self.values = np.concatenate(values) if values else np.zeros(0, complex)
         self.axis = np.arange(len(self.values), dtype=float)
-        self._fps = np.asarray(fps, float)
-        self._start_f = np.asarray(start, float) * self._fps  # start, in frames
-        self._period = period
-        self._loop = loop
-        self._from_loop = self._start_f - loop  # frames past loop_start at time 0
-        self._loop_at = loop + base  # where each loop begins on the axis
-        self._last_at = last + base
-        self._base = base
+        fps = np.asarray(fps, float)
+        start_f = np.asarray(start, float) * fps  # start, in frames
         # From this simulated time on, every person is inside their loop.
-        self.looping_from = float(np.max((loop - self._start_f) / self._fps, initial=0.0))
+        self.looping_from = float(np.max((loop - start_f) / fps, initial=0.0))
+        # Per-person constants as columns: queries are (people × times), each row in order.
+        col = lambda a: np.ascontiguousarray(a, float).reshape(-1, 1)  # noqa: E731
+        self._fps = fps
+        self._start_f, self._period, self._loop = col(start_f), col(period), col(loop)
+        self._from_loop = col(start_f - loop)  # frames past loop_start at time 0
+        self._loop_at = col(loop + base)  # where each loop begins on the axis
+        self._last_at, self._base = col(last + base), col(base)
 
-    def xy(self, times: np.ndarray) -> np.ndarray:
-        """Everyone's pelvis ``x + iy`` at ``times (n,)``: complex ``(n, P)``."""
-        f = np.multiply.outer(times, self._fps)
-        if len(times) and times.min() >= self.looping_from + _SAFE_S:
-            # Everyone is inside their loop: one wrap, no branch.
+    def xy(self, times: np.ndarray, earliest: float | None = None) -> np.ndarray:
+        """Everyone's pelvis ``x + iy`` at ``times (n,)``: complex ``(P, n)``.
+
+        ``earliest`` (optional) is ``times.min()``, when the caller knows it.
+        """
+        f = np.multiply.outer(self._fps, times)
+        if earliest is None:
+            earliest = float(times.min()) if len(times) else 0.0
+        if earliest >= self.looping_from + _SAFE_S:
+            # Everyone is inside their loop: one wrap (of non-negative values), no branch.
             f += self._from_loop
-            np.mod(f, self._period, out=f)
+            np.fmod(f, self._period, out=f)
             f += self._loop_at
         else:
             f += self._start_f
-            wrapped = np.mod(f - self._loop, self._period)
+            wrapped = np.fmod(f - self._loop, self._period)
             wrapped += self._loop_at
             f += self._base
             f = np.where(f > self._last_at, wrapped, f)

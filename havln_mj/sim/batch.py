@@ -14,9 +14,16 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from havln_mj.sim.body import Body, BodyKind, Film, Outcome
 from havln_mj.frames import wrap_heading
-from havln_mj.sim.crowd import Crowd, batch_proximity, sample_knots
+from havln_mj.sim.body import Body, BodyKind, Film, Outcome
+from havln_mj.sim.crowd import (
+    NO_PROXIMITY,
+    Crowd,
+    NearMemo,
+    Proximity,
+    batch_proximity,
+    sample_knots,
+)
 from havln_mj.sim.frame import View
 from havln_mj.sim.images import ImageFormat
 from havln_mj.sim.navigation import NavTable
@@ -45,6 +52,7 @@ class Element:
         "film",
         "heading",
         "navigable",
+        "people",
         "state",
         "step",
         "table",
@@ -54,6 +62,7 @@ class Element:
 
     def __init__(self, table: NavTable, crowd: Crowd, body: Body) -> None:
         self.table, self.crowd, self.body = table, crowd, body
+        self.people = len(crowd) > 0
         self.heading = self.elevation = self.time = 0.0
         self.view_index = self.step = 0
         self.navigable: list[ViewPoint] = []
@@ -86,6 +95,9 @@ class Batch:
         self.elements: list[Element] = []
         self.film: tuple[float, FilmCallback, tuple[str, ...]] | None = None
         self.reactions = None  # how people react to the agent (None: they do not)
+        self._cos_fov: float | None = None
+        self._near = NearMemo()
+        self._blank: tuple[np.ndarray, np.ndarray] | None = None
 
     def view(self, heading: float, elevation: float) -> tuple[float, float, int]:
         """Heading, elevation and view index under the view rules."""
@@ -112,12 +124,13 @@ class Batch:
             el.heading, el.elevation, _ = self.view(h, e)
             elements.append(el)
         self.elements = elements
+        self._prepare_step()
         started = []
         for i, (el, start) in enumerate(zip(elements, starts, strict=True)):
             el.film = self._new_film(i, el)
             outcome = el.body.start(start[2], el.heading, el.elevation, 0.0)
             started.append((el, outcome, None, el.elevation, 0))
-        self._publish(started, starting=True)
+        self._settle_all(started, starting=True)
 
     def _new_film(self, i: int, el: Element) -> Film | None:
         if self.film is None or not self.cfg.rendering:
@@ -140,12 +153,13 @@ class Batch:
     ) -> None:
         """Move, then rotate, for each (element, index, dh, de); ``waits`` override WAIT_S.
 
-        The collision signal of the whole batch is computed in one call once every element
-        has moved.
+        The collision signal of every element with people is computed in one call once they
+        have all moved.
         """
         cfg = self.cfg
         discretized, (lo, hi) = cfg.discretized, cfg.elevation_limits
-        elements, moved = self.elements, []
+        self._prepare_step()
+        elements, deferred = self.elements, []
         for n, (i, k, dh, de) in enumerate(actions):
             el = elements[i]
             if discretized:
@@ -158,66 +172,90 @@ class Batch:
             target = el.navigable[k].viewpointId
             wait_s = WAIT_S if waits is None else waits[n]
             outcome = el.body.move(target, heading, elevation, el.time, wait_s, el.film)
-            moved.append((el, outcome, heading, elevation, index))
-        self._publish(moved)
+            if el.people:
+                deferred.append((el, outcome, heading, elevation, index))
+            else:
+                self._settle(el, outcome, heading, elevation, index, NO_PROXIMITY)
+        if deferred:
+            self._settle_all(deferred)
 
     def robot(self, actions: Sequence[str]) -> None:
         """A robot action per element (``"stop"`` leaves it alone)."""
+        self._prepare_step()
         moved = []
         for el, act in zip(self.elements, actions, strict=True):
             if act != "stop":
                 outcome = el.body.robot_action(act, el.time, el.film)
                 moved.append((el, outcome, None, el.elevation, 0))
-        self._publish(moved)
+        self._settle_all(moved)
 
-    def _publish(self, moved: list[tuple], starting: bool = False) -> None:
-        """Advances clocks and views by each ``(element, outcome, heading asked, elevation,
-        view index)`` and publishes the states (a heading of None: apply the view rules)."""
-        if not moved:
-            return
+    def _prepare_step(self) -> None:
+        """What every element's state needs this step: the navigation rule, blank images."""
         cfg = self.cfg
-        cos_fov = cfg.cos_half_hfov()
-        contacts = batch_proximity(
-            [(el.crowd, outcome.knots) for el, outcome, *_ in moved], self.collision_distance
+        self._cos_fov = cfg.cos_half_hfov()
+        self._blank = None if cfg.rendering else self.format.blank(cfg.width, cfg.height)
+
+    def _settle_all(self, moved: list[tuple], starting: bool = False) -> None:
+        """Settles each ``(element, outcome, heading asked, elevation, view index)``.
+
+        The collision signal of all of them is computed in one call.
+        """
+        tracks = [(el.crowd, outcome.knots) for el, outcome, *_ in moved]
+        contacts = batch_proximity(tracks, self.collision_distance, self._near)
+        for m, contact in zip(moved, contacts, strict=True):
+            self._settle(*m, contact, starting)
+
+    def _settle(
+        self,
+        el: Element,
+        outcome: Outcome,
+        heading: float | None,
+        elevation: float,
+        index: int,
+        contact: Proximity,
+        starting: bool = False,
+    ) -> None:
+        """Advances ``el``'s clock and view by ``outcome`` and publishes its state.
+
+        ``heading`` is the heading the action asked for (None: the view rules are applied to
+        the body's heading, as for robot actions and starts).
+        """
+        if not starting:
+            el.time += outcome.duration
+            el.step += 1
+        if heading is None or outcome.heading != heading:
+            heading, elevation, index = self.view(outcome.heading, elevation)
+        el.heading, el.elevation, el.view_index = heading, elevation, index
+        el.navigable = navigable = el.table.candidates(
+            outcome.viewpoint, heading, elevation, self._cos_fov
         )
-        blank = None if cfg.rendering else self.format.blank(cfg.width, cfg.height)
-        for (el, outcome, heading, elevation, index), contact in zip(moved, contacts):  # noqa: B905
-            if not starting:
-                el.time += outcome.duration
-                el.step += 1
-            if heading is None or outcome.heading != heading:
-                heading, elevation, index = self.view(outcome.heading, elevation)
-            el.heading, el.elevation, el.view_index = heading, elevation, index
-            el.navigable = navigable = el.table.candidates(
-                outcome.viewpoint, heading, elevation, cos_fov
-            )
-            if blank is None:
-                if starting and el.film is not None:
-                    el.film.tick(el.time)
-                rgb, depth, mask = self._images(el)
-            else:
-                (rgb, depth), mask = blank, None
-            el.state = SimState(
-                el.table.scan_id,
-                el.step,
-                rgb,
-                depth,
-                navigable[0],
-                heading,
-                elevation,
-                index,
-                navigable,
-                el.time,
-                int(contact.crushed),
-                contact.people,
-                contact.min_distance,
-                mask,
-                el.body.pose(),
-                outcome.fell,
-                outcome.contacts,
-                outcome.arrived,
-                outcome.diverged,
-            )
+        if self._blank is None:
+            if starting and el.film is not None:
+                el.film.tick(el.time)
+            rgb, depth, mask = self._images(el)
+        else:
+            (rgb, depth), mask = self._blank, None
+        el.state = SimState(
+            el.table.scan_id,
+            el.step,
+            rgb,
+            depth,
+            navigable[0],
+            heading,
+            elevation,
+            index,
+            navigable,
+            el.time,
+            int(contact.crushed),
+            contact.people,
+            contact.min_distance,
+            mask,
+            el.body.pose(),
+            outcome.fell,
+            outcome.contacts,
+            outcome.arrived,
+            outcome.diverged,
+        )
 
     def _images(self, el: Element) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         cfg = self.cfg

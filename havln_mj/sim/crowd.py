@@ -18,6 +18,7 @@ distance reported is exact below ``NEAR_M`` and ``inf`` above.
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Sequence
 from typing import NamedTuple, Protocol
 
@@ -214,16 +215,48 @@ def knots_proximity(
     return batch_proximity([(crowd, knots)], distance)[0]
 
 
+class NearMemo:
+    """Remembers who is near each straight track met before, per crowd.
+
+    A point body walks the graph's edges, so the same few hundred straight tracks come back
+    all the time; which people come within reach of one depends only on its two ends and the
+    people's footprints. Long tracks (a robot's) are not remembered.
+    """
+
+    LIMIT = 1 << 16  # tracks remembered per crowd
+
+    def __init__(self) -> None:
+        self._seen: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+    def near(self, crowd: Crowd, rows: Sequence[Sequence[float]], reach: float) -> list[int]:
+        """:func:`_near_rows`, remembered for straight tracks of up to three knots."""
+        n = len(rows)
+        a, b = rows[0], rows[-1]
+        if n > 3 or (n == 3 and (rows[1][1] != b[1] or rows[1][2] != b[2])):
+            return _near_rows(crowd, rows, reach)
+        seen = self._seen.get(crowd)
+        if seen is None:
+            seen = self._seen[crowd] = {}
+        key = (reach, a[1], a[2], b[1], b[2])
+        near = seen.get(key)
+        if near is None:
+            near = _near_rows(crowd, rows, reach)
+            if len(seen) < self.LIMIT:
+                seen[key] = near
+        return near
+
+
 def batch_proximity(
     tracks: Sequence[tuple[Crowd, np.ndarray | Sequence[Sequence[float]]]],
     distance: float = COLLISION_DISTANCE,
+    memo: NearMemo | None = None,
 ) -> list[Proximity]:
     """The collision signal of several tracks (a batch's actions) at once.
 
     Each ``(crowd, knots)`` is answered as :func:`knots_proximity` answers it. Tracks among
     the same people whose crowd offers a tabulated pelvis track (``pelvis_table()``, see
     :mod:`havln_mj.humans.tracks`) are sampled together in one vectorised pass; other crowds
-    are asked for positions track by track.
+    are asked for positions track by track. ``memo`` remembers who is near which track.
     """
     out = [NO_PROXIMITY] * len(tracks)
     reach = max(NEAR_M, distance)
@@ -232,7 +265,7 @@ def batch_proximity(
         if not len(crowd):
             continue
         rows = knots if isinstance(knots, tuple | list) else np.asarray(knots, float).tolist()
-        near = _near_rows(crowd, rows, reach)
+        near = memo.near(crowd, rows, reach) if memo else _near_rows(crowd, rows, reach)
         if near:
             groups.setdefault(id(crowd), (crowd, []))[1].append((slot, rows, near))
     for crowd, items in groups.values():
@@ -252,11 +285,20 @@ def _samples(rows: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
     if len(rows) == 1 or t1 <= t0:
         last = rows[-1]
         return np.array([t1]), np.array([complex(last[1], last[2])])
-    times = _linspace(t0, t1, max(2, math.ceil((t1 - t0) * SAMPLE_HZ) + 1))
-    if len(rows) > 2:  # inner knots are samples too
-        times = np.concatenate([times, [r[0] for r in rows[1:-1]]])
-    xy = np.interp(times, [r[0] for r in rows], [complex(r[1], r[2]) for r in rows])
-    return times, xy
+    n = max(2, math.ceil((t1 - t0) * SAMPLE_HZ) + 1)
+    inner = len(rows) - 2  # inner knots are samples too
+    if n + inner > len(_STEPS):
+        times = np.concatenate([_linspace(t0, t1, n), [r[0] for r in rows[1:-1]]])
+    else:
+        times = np.empty(n + inner)
+        np.multiply(_STEPS[:n], (t1 - t0) / (n - 1), out=times[:n])
+        times[:n] += t0
+        times[n - 1] = t1
+        if inner:
+            times[n:] = [r[0] for r in rows[1:-1]]
+    knot_t = np.array([r[0] for r in rows])
+    knot_xy = np.array([complex(r[1], r[2]) for r in rows])
+    return times, np.interp(times, knot_t, knot_xy)
 
 
 def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> None:
@@ -266,21 +308,29 @@ def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> Non
     farther than :data:`NEAR_M`, so they change neither the flags nor the reported distance.
     """
     if len(items) == 1:
-        times, agent = _samples(items[0][1])
-        starts = None
+        rows = items[0][1]
+        times, agent = _samples(rows)
+        earliest, starts = rows[0][0], None
     else:
         parts = [_samples(rows) for _, rows, _ in items]
         times = np.concatenate([p[0] for p in parts])
         agent = np.concatenate([p[1] for p in parts])
         starts = np.cumsum([0] + [len(p[0]) for p in parts[:-1]])
-    gap = table.xy(times)
-    gap -= agent[:, None]
+        earliest = min(rows[0][0] for _, rows, _ in items)
+    gap = table.xy(times, earliest)  # (people, samples)
+    gap -= agent
     d = np.abs(gap)
-    closest = [d.min(axis=0).tolist()] if starts is None else np.minimum.reduceat(d, starts).tolist()
+    if starts is None:
+        closest = [d.min(axis=1).tolist()]
+    else:
+        closest = np.minimum.reduceat(d, starts, axis=1).T.tolist()
     for (slot, _, _), row in zip(items, closest, strict=True):
-        hit = tuple(k for k, v in enumerate(row) if v <= distance)
         smallest = min(row)
-        out[slot] = Proximity(bool(hit), hit, smallest if smallest < NEAR_M else math.inf)
+        if smallest <= distance:
+            hit = tuple([k for k, v in enumerate(row) if v <= distance])
+            out[slot] = Proximity(True, hit, smallest if smallest < NEAR_M else math.inf)
+        elif smallest < NEAR_M:
+            out[slot] = Proximity(False, (), smallest)
 
 
 def track_proximity(

@@ -138,7 +138,8 @@ class NavTable:
             if cos_half_hfov is not None and (flat == 0.0 or math.cos(rel) < cos_half_hfov):
                 continue
             rel_e = elev - elevation
-            found.append((math.hypot(rel, rel_e), order, ViewPoint(j, ix, x, y, z, rel, rel_e, dist)))
+            vp_j = ViewPoint(j, ix, x, y, z, rel, rel_e, dist)
+            found.append((math.hypot(rel, rel_e), order, vp_j))
         out = [ViewPoint(vp, *node.here)]
         if len(found) == 1:
             out.append(found[0][2])
@@ -146,7 +147,6 @@ class NavTable:
             found.sort()  # by angle from the view centre, ties in file order
             out.extend(f[2] for f in found)
         return out
-
 
 
 def camera_positions(graph: NavGraph) -> dict[str, tuple[float, float, float]]:
