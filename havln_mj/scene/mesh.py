@@ -22,16 +22,19 @@ takes the file's +y (up) to +z.
 
 from __future__ import annotations
 
+import struct
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import trimesh
 
 from havln_mj.cache import atomic_write_bytes
 from havln_mj.errors import CorruptMeshError, InvalidArgumentError, MissingDataError
 from havln_mj.scene.boxes import BoxSet
+
+if TYPE_CHECKING:
+    import trimesh
 
 # Corner order and the two triangles of each face, counter-clockwise seen from outside.
 _CORNERS = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], dtype=float)
@@ -101,6 +104,8 @@ def boxes_to_parts(boxes: BoxSet) -> list[MeshPart]:
 
 def write_glb(parts: list[MeshPart], path: Path) -> None:
     """Writes mesh parts as a binary glTF, one mesh and one PBR material per part."""
+    import trimesh  # a large import: only when meshes are read or written
+
     scene = trimesh.Scene()
     for part in parts:
         colour = np.round(np.array(part.rgba) * 255).astype(np.uint8)
@@ -168,6 +173,33 @@ def _image_array(image: Any, path: Path, max_size: int | None) -> np.ndarray:
     return array
 
 
+def check_glb(path: Path) -> None:
+    """Checks that ``path`` holds a whole binary glTF without parsing it (no trimesh).
+
+    The header's magic and version, its total length against the file's size, and each
+    chunk's length against what follows: a truncated or overwritten file fails.
+
+    Raises:
+        MissingDataError: The file does not exist.
+        CorruptMeshError: The file is not a whole binary glTF 2.0.
+    """
+    try:
+        data = Path(path).read_bytes()
+    except FileNotFoundError:
+        raise MissingDataError(f"mesh file not found: {path}") from None
+    magic, version, length = struct.unpack_from("<4sII", data) if len(data) >= 12 else (b"", 0, 0)
+    ok = magic == b"glTF" and version == 2 and length == len(data)
+    at = 12
+    while ok and at < length:
+        ok = at + 8 <= length
+        if ok:
+            (size,) = struct.unpack_from("<I", data, at)
+            at += 8 + size
+            ok = at <= length
+    if not ok or at == 12:
+        raise CorruptMeshError(f"{path}: not a whole binary glTF 2.0 file")
+
+
 def load_mesh_parts(
     path: Path, *, up: str = "z", max_texture_size: int | None = None
 ) -> list[MeshPart]:
@@ -189,6 +221,8 @@ def load_mesh_parts(
         MissingDataError: The file does not exist.
         CorruptMeshError: The file or a texture cannot be parsed, or it holds no triangles.
     """
+    import trimesh  # a large import: only when meshes are read or written
+
     if up not in UP_AXES:
         raise InvalidArgumentError(f"up must be one of {UP_AXES}, got {up!r}")
     if max_texture_size is not None and not (
@@ -251,6 +285,8 @@ def load_mesh_parts(
 
 def parts_to_trimesh(parts: list[MeshPart]) -> trimesh.Trimesh:
     """All parts merged into one mesh (for collision decomposition and ray casts)."""
+    import trimesh  # a large import: only when meshes are read or written
+
     offsets = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
     verts = np.concatenate([p.vertices for p in parts])
     faces = np.concatenate([p.faces + o for p, o in zip(parts, offsets, strict=True)])

@@ -19,7 +19,6 @@ import numpy as np
 from havln_mj.cache import atomic_replace_dir, atomic_write_bytes, atomic_write_json, staging_dir
 from havln_mj.errors import MissingDataError
 from havln_mj.scene.connectivity import read_connectivity
-from havln_mj.scene.matterport.frame import check_frame
 from havln_mj.scene.matterport.house import read_house
 from havln_mj.scene.matterport.layout import (
     find_house_file,
@@ -28,7 +27,6 @@ from havln_mj.scene.matterport.layout import (
 )
 from havln_mj.scene.mesh import boxes_to_parts, load_mesh_parts, parts_to_trimesh, write_glb
 from havln_mj.scene.navgraph import NavGraph, level_groups
-from havln_mj.scene.proxy.build import ProxyParams, build_proxy
 from havln_mj.scene.proxy.routes import write_routes
 from havln_mj.scene.regions import Level, Region, Regions
 from havln_mj.scene.scanfolder import BOXES, CONNECTIVITY, META, REGIONS, ROUTES
@@ -74,6 +72,10 @@ def build_real_scan(
             lists every path looked at and how to get the data.
         FrameMismatchError: The mesh and the connectivity graph disagree on the frame.
     """
+    # Mesh checks and proxy synthesis pull in trimesh and scipy: only when a scan is built.
+    from havln_mj.scene.matterport.frame import check_frame
+    from havln_mj.scene.proxy.build import ProxyParams, build_proxy
+
     conn_dir = resolve_connectivity_dir(connectivity_dir)
     conn_path = conn_dir / f"{scan_id}_connectivity.json" if conn_dir else None
     root = resolve_mp3d_root(mp3d_dir)

@@ -8,16 +8,13 @@ import shutil
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Any
-
-import trimesh
+from typing import TYPE_CHECKING, Any
 
 from havln_mj.cache import atomic_replace_dir, staging_dir
 from havln_mj.errors import MalformedDataError, MissingDataError
 from havln_mj.paths import cache_dir
 from havln_mj.scene.boxes import BoxSet
 from havln_mj.scene.ids import parse_scene_id
-from havln_mj.scene.mesh import MeshPart, load_mesh_parts, parts_to_trimesh
 from havln_mj.scene.navgraph import NavGraph, level_groups
 from havln_mj.scene.proxy.routes import Route, read_routes
 from havln_mj.scene.regions import Regions
@@ -30,6 +27,11 @@ from havln_mj.scene.scanfolder import (
     REGIONS,
     ROUTES,
 )
+
+if TYPE_CHECKING:
+    import trimesh
+
+    from havln_mj.scene.mesh import MeshPart
 
 log = logging.getLogger(__name__)
 
@@ -73,11 +75,15 @@ class Scan:
     @cached_property
     def mesh_parts(self) -> list[MeshPart]:
         """The visual mesh, one part per material (loaded once)."""
+        from havln_mj.scene.mesh import load_mesh_parts  # trimesh: only when meshes are read
+
         return load_mesh_parts(self.mesh_path, up=str(self.meta.get("up", "z")))
 
     @cached_property
     def mesh(self) -> trimesh.Trimesh:
         """All mesh parts merged into one mesh (for sections, slices and decomposition)."""
+        from havln_mj.scene.mesh import parts_to_trimesh
+
         return parts_to_trimesh(self.mesh_parts)
 
     @property
@@ -241,6 +247,15 @@ def load_scan(
 
 
 def _validated(scan: Scan) -> Scan:
-    """Reads the mesh once so a damaged cache entry is caught here, not in the builder."""
-    scan.mesh_parts  # noqa: B018 - loads and caches the parts
+    """Checks the cached mesh so a damaged entry is caught here, not in the builder.
+
+    A binary glTF is checked for wholeness without being parsed (parsing loads trimesh, which
+    only rendering and collision building need); other meshes are read once.
+    """
+    if scan.mesh_path.suffix == ".glb":
+        from havln_mj.scene.mesh import check_glb
+
+        check_glb(scan.mesh_path)
+    else:
+        scan.mesh_parts  # noqa: B018 - loads and caches the parts
     return scan

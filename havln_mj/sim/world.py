@@ -11,10 +11,10 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
-import trimesh
 
 from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
@@ -25,6 +25,9 @@ from havln_mj.robot.point_body import add_point_body
 from havln_mj.scene.collision import CoacdParams, decompose
 from havln_mj.scene.scan import Scan, floor_heights
 from havln_mj.sim.visual import add_visual_parts, safe_name
+
+if TYPE_CHECKING:
+    import trimesh
 
 COLLISION_MODES = ("auto", "boxes", "coacd", "none")
 
@@ -106,6 +109,8 @@ def _add_boxes(spec: mujoco.MjSpec, scan: Scan) -> int:
 
 def _slice_box(mesh: trimesh.Trimesh, lo: np.ndarray, hi: np.ndarray) -> trimesh.Trimesh:
     """The part of ``mesh`` inside the axis-aligned box [lo, hi] (open cuts, no caps)."""
+    import trimesh  # a large import: only when a mesh is decomposed
+
     for axis in range(3):
         for sign, value in ((1.0, lo[axis]), (-1.0, hi[axis])):
             normal = np.zeros(3)
