@@ -52,3 +52,16 @@ def test_geodesic_distances_load_scipy_when_asked():
         "sim.getGeodesicDistance([sim.graph('proc-0').nodes[-1]])\n"
     )
     assert _loaded_after(code) == ["scipy"]
+
+
+def test_people_without_rendering_need_no_heavy_library():
+    code = (
+        "import havln_mj\n"
+        "sim = havln_mj.Simulator(humans=True)\n"
+        "sim.setRenderingEnabled(False)\n"
+        "sim.newRandomEpisode(['proc-0'])\n"
+        "for _ in range(20):\n"
+        "    sim.makeAction([len(sim.getState()[0].navigableLocations) - 1], [0.5], [0.0])\n"
+        "assert sim.getHumanState()[0]\n"
+    )
+    assert _loaded_after(code) == []

@@ -12,9 +12,12 @@ without its gathers, rotations and per-coordinate work (the values agree to roun
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 _SAFE_S = 1e-6  # seconds past everyone's entry into their loop before the short path is taken
+_SUBSETS = 4096  # sets of people whose constants are kept
 
 
 class PelvisTable:
@@ -59,34 +62,71 @@ class PelvisTable:
         self.values = np.concatenate(values) if values else np.zeros(0, complex)
         self.axis = np.arange(len(self.values), dtype=float)
         fps = np.asarray(fps, float)
-        start_f = np.asarray(start, float) * fps  # start, in frames
-        # From this simulated time on, every person is inside their loop.
-        self.looping_from = float(np.max((loop - start_f) / fps, initial=0.0))
-        # Per-person constants as columns: queries are (people × times), each row in order.
-        col = lambda a: np.ascontiguousarray(a, float).reshape(-1, 1)  # noqa: E731
-        self._fps = fps
-        self._start_f, self._period, self._loop = col(start_f), col(period), col(loop)
-        self._from_loop = col(start_f - loop)  # frames past loop_start at time 0
-        self._loop_at = col(loop + base)  # where each loop begins on the axis
-        self._last_at, self._base = col(last + base), col(base)
+        self._person = (fps, np.asarray(start, float) * fps, period, loop, last, base)
+        self._everyone = _Columns(*self._person)
+        self._subsets: dict[tuple[int, ...], _Columns] = {}
 
-    def xy(self, times: np.ndarray, earliest: float | None = None) -> np.ndarray:
-        """Everyone's pelvis ``x + iy`` at ``times (n,)``: complex ``(P, n)``.
+    def _columns(self, people: Sequence[int] | None) -> _Columns:
+        if people is None or len(people) == self.size:
+            return self._everyone
+        key = tuple(people)
+        cols = self._subsets.get(key)
+        if cols is None:
+            if len(self._subsets) >= _SUBSETS:
+                self._subsets.clear()
+            index = np.asarray(key, int)
+            cols = self._subsets[key] = _Columns(*(a[index] for a in self._person))
+        return cols
+
+    def xy(
+        self,
+        times: np.ndarray,
+        earliest: float | None = None,
+        people: Sequence[int] | None = None,
+    ) -> np.ndarray:
+        """Pelvis ``x + iy`` of ``people`` (default everyone) at ``times (n,)``: ``(P, n)``.
 
         ``earliest`` (optional) is ``times.min()``, when the caller knows it.
         """
-        f = np.multiply.outer(self._fps, times)
+        c = self._columns(people)
+        f = np.multiply.outer(c.fps, times)
         if earliest is None:
             earliest = float(times.min()) if len(times) else 0.0
-        if earliest >= self.looping_from + _SAFE_S:
+        if earliest >= c.looping_from + _SAFE_S:
             # Everyone is inside their loop: one wrap (of non-negative values), no branch.
-            f += self._from_loop
-            np.fmod(f, self._period, out=f)
-            f += self._loop_at
+            f += c.from_loop
+            np.fmod(f, c.period, out=f)
+            f += c.loop_at
         else:
-            f += self._start_f
-            wrapped = np.fmod(f - self._loop, self._period)
-            wrapped += self._loop_at
-            f += self._base
-            f = np.where(f > self._last_at, wrapped, f)
+            f += c.start_f
+            wrapped = np.fmod(f - c.loop, c.period)
+            wrapped += c.loop_at
+            f += c.base
+            f = np.where(f > c.last_at, wrapped, f)
         return np.interp(f, self.axis, self.values)
+
+
+class _Columns:
+    """Per-person constants of some people, as columns: queries are (people × times)."""
+
+    __slots__ = (
+        "base",
+        "fps",
+        "from_loop",
+        "last_at",
+        "loop",
+        "loop_at",
+        "looping_from",
+        "period",
+        "start_f",
+    )
+
+    def __init__(self, fps, start_f, period, loop, last, base) -> None:
+        col = lambda a: np.ascontiguousarray(a, float).reshape(-1, 1)  # noqa: E731
+        self.fps = np.ascontiguousarray(fps, float)
+        self.start_f, self.period, self.loop = col(start_f), col(period), col(loop)
+        self.from_loop = col(start_f - loop)  # frames past loop_start at time 0
+        self.loop_at = col(loop + base)  # where each loop begins on the axis
+        self.last_at, self.base = col(last + base), col(base)
+        # From this simulated time on, each of these people is inside their loop.
+        self.looping_from = float(np.max((loop - start_f) / fps, initial=0.0))

@@ -9,12 +9,13 @@ pipeline and, when a film is set, frames during actions.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from havln_mj.frames import wrap_heading
+from havln_mj.frames import TWO_PI
 from havln_mj.sim.body import Body, BodyKind, Film, Outcome
 from havln_mj.sim.crowd import (
     NO_PROXIMITY,
@@ -167,7 +168,11 @@ class Batch:
                 de = discrete_delta(de, ELEVATION_INCREMENT)
                 heading, elevation, index = discrete_view(el.heading + dh, el.elevation + de)
             else:
-                heading = wrap_heading(el.heading + dh)
+                heading = math.fmod(el.heading + dh, TWO_PI)  # wrap_heading, inlined
+                if heading < 0.0:
+                    heading += TWO_PI
+                    if heading >= TWO_PI:
+                        heading = 0.0
                 elevation, index = min(max(el.elevation + de, lo), hi), 0
             target = el.navigable[k].viewpointId
             wait_s = WAIT_S if waits is None else waits[n]

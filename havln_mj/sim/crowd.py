@@ -304,11 +304,12 @@ def _samples(rows: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
 def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> None:
     """The signal of ``items`` ``(slot, knots, near)`` among one crowd, read from its table.
 
-    Every person is measured (one pass for all tracks): people the pruning left out are
-    farther than :data:`NEAR_M`, so they change neither the flags nor the reported distance.
+    The people near any of the tracks are measured along all of them in one pass: people the
+    pruning left out of a track are farther than :data:`NEAR_M` from it, so measuring them
+    changes neither its flags nor its reported distance.
     """
     if len(items) == 1:
-        rows = items[0][1]
+        _, rows, people = items[0]
         times, agent = _samples(rows)
         earliest, starts = rows[0][0], None
     else:
@@ -317,17 +318,21 @@ def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> Non
         agent = np.concatenate([p[1] for p in parts])
         starts = np.cumsum([0] + [len(p[0]) for p in parts[:-1]])
         earliest = min(rows[0][0] for _, rows, _ in items)
-    gap = table.xy(times, earliest)  # (people, samples)
+        people = sorted(set().union(*(near for _, _, near in items)))
+    # Few people: all of them (no subset to look up); many: those near.
+    who = None if table.size <= _VECTOR_NEAR else people
+    gap = table.xy(times, earliest, who)  # (people, samples)
     gap -= agent
     d = np.abs(gap)
     if starts is None:
         closest = [d.min(axis=1).tolist()]
     else:
         closest = np.minimum.reduceat(d, starts, axis=1).T.tolist()
+    index = range(table.size) if who is None else who
     for (slot, _, _), row in zip(items, closest, strict=True):
         smallest = min(row)
         if smallest <= distance:
-            hit = tuple([k for k, v in enumerate(row) if v <= distance])
+            hit = tuple(sorted(k for k, v in zip(index, row, strict=True) if v <= distance))
             out[slot] = Proximity(True, hit, smallest if smallest < NEAR_M else math.inf)
         elif smallest < NEAR_M:
             out[slot] = Proximity(False, (), smallest)

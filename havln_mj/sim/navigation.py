@@ -38,11 +38,14 @@ _Neighbour = tuple[int, str, int, float, float, float, float, float, float, floa
 class _Node:
     """One viewpoint's own location and its neighbours, ready for queries."""
 
-    __slots__ = ("bearings", "here", "ring", "rows", "xyz")
+    __slots__ = ("bearings", "here", "location", "ring", "rows", "xyz")
 
-    def __init__(self, here: tuple, rows: list[_Neighbour]) -> None:
+    def __init__(self, vp: str, here: tuple, rows: list[_Neighbour]) -> None:
         self.here = here  # (ix, x, y, z)
         self.xyz = here[1:]
+        # The agent's own location here (relative values 0): the same object in every state
+        # at this viewpoint, as nothing ever changes it.
+        self.location = ViewPoint(vp, *here)
         self.rows = rows  # file order
         # Neighbours with a bearing, sorted by it and repeated one turn later, so that any
         # window [h − w, h + w] with h in [0, 2π) and w < π is one slice.
@@ -72,7 +75,7 @@ class NavTable:
             UnknownViewpointError: ``vp`` is unknown or excluded.
         """
         node = self._nodes.get(vp) or self._prepare(vp)
-        return ViewPoint(vp, *node.here)
+        return node.location
 
     def position(self, vp: str) -> tuple[float, float, float]:
         """The camera position of ``vp`` as plain floats.
@@ -96,16 +99,14 @@ class NavTable:
             elev = math.atan2(dz, flat)
             dist = math.sqrt(flat**2 + dz**2)
             rows.append((order, j, g.index(j), x, y, z, bearing, flat, elev, dist))
-        node = self._nodes[vp] = _Node((g.index(vp), x0, y0, z0), rows)
+        node = self._nodes[vp] = _Node(vp, (g.index(vp), x0, y0, z0), rows)
         return node
 
     def _half_width(self, cos_half_hfov: float) -> float:
         """Half-width of the bearing window holding every neighbour the rule keeps."""
-        c, w = self._window
-        if c != cos_half_hfov:
-            # cos(rel) ≥ c  ⇔  |rel| ≤ acos(c) for rel in (−π, π]; the margin covers rounding.
-            w = math.acos(max(-1.0, min(1.0, cos_half_hfov))) + _MARGIN
-            self._window = (cos_half_hfov, w)
+        # cos(rel) ≥ c  ⇔  |rel| ≤ acos(c) for rel in (−π, π]; the margin covers rounding.
+        w = math.acos(max(-1.0, min(1.0, cos_half_hfov))) + _MARGIN
+        self._window = (cos_half_hfov, w)
         return w
 
     def candidates(
@@ -125,7 +126,9 @@ class NavTable:
         node = self._nodes.get(vp) or self._prepare(vp)
         rows = node.rows
         if cos_half_hfov is not None:
-            w = self._half_width(cos_half_hfov)
+            c, w = self._window
+            if c != cos_half_hfov:
+                w = self._half_width(cos_half_hfov)
             if w < _PI and 0.0 <= heading < _TWO_PI:
                 b = node.bearings
                 rows = node.ring[bisect_left(b, heading - w) : bisect_right(b, heading + w)]
@@ -140,7 +143,7 @@ class NavTable:
             rel_e = elev - elevation
             vp_j = ViewPoint(j, ix, x, y, z, rel, rel_e, dist)
             found.append((math.hypot(rel, rel_e), order, vp_j))
-        out = [ViewPoint(vp, *node.here)]
+        out = [node.location]
         if len(found) == 1:
             out.append(found[0][2])
         elif found:

@@ -25,6 +25,7 @@ from havln_mj.scene.scan import Scan
 from havln_mj.sim.body import Film, Outcome, ignore
 from havln_mj.sim.crowd import Crowd
 from havln_mj.sim.frame import Frames, View, ViewSettings
+from havln_mj.sim.memory import release_free_memory
 from havln_mj.sim.navigation import camera_positions
 from havln_mj.sim.world import WorldOptions, build_world
 
@@ -40,6 +41,7 @@ class Stage:
         self.data = mujoco.MjData(self.world.model)
         self.frames = Frames(self.world.model, crowd, options.people_style)
         self.rig = PointBody(np.zeros(3))
+        release_free_memory()  # what compiling the world allocated and freed
 
     def place(self, pose: tuple) -> None:
         """Writes the rig's pose ``(position, heading, elevation)`` into the data."""
