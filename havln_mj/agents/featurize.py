@@ -38,7 +38,7 @@ class FeatureSpec:
 
     Attributes:
         view: How views are rendered.
-        encoder: :class:`ViewEncoder` arguments.
+        encoder: :class:`~havln_mj.agents.vision.ViewEncoder` arguments.
         pretrain_scenes: How many of the first scenes the encoder is pretrained on.
         pretrain_viewpoints: Viewpoints drawn per pretraining scene.
         pretrain_epochs: Pretraining epochs.

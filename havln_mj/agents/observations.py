@@ -20,6 +20,7 @@ from havln_mj.sim.state import SimState
 from havln_mj.sim.viewing import HEADING_COUNT
 
 PROPRIO_DIM = 5
+"""Values an observation holds about the agent itself, after the view feature."""
 
 
 def action_mask(state: SimState, half_hfov: float) -> np.ndarray:

@@ -35,7 +35,8 @@ from havln_mj.sim.viewing import (
     NUM_VIEWS,
 )
 
-REGION_CODES = tuple(sorted(REGION_LABELS))  # region classes of the pretraining target
+REGION_CODES = tuple(sorted(REGION_LABELS))
+"""Region label codes, in the order of the pretraining target's region classes."""
 MAX_DEPTH = 10.0  # metres; depth targets and inputs are clipped here
 
 

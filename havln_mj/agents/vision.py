@@ -37,6 +37,7 @@ TARGET_KEYS = ("region", "person", "forward", "depth")
 # The person fraction is small and its soft-target gradient weak; weighted up so it is learnt
 # alongside the others (tuned on a synthetic set where all four are learnable).
 DEFAULT_LOSS_WEIGHTS = {"region": 1.0, "person": 10.0, "forward": 1.0, "depth": 1.0}
+"""Weights of the view encoder's pretraining loss terms."""
 
 # ---------------------------------------------------------------------- input preparation
 
@@ -536,7 +537,7 @@ def pretrain_encoder(
         loss_weights: Per-term weights for :func:`pretrain_loss`.
 
     Returns:
-        One dict per epoch: ``epoch``, ``seconds``, ``train_total`` and ``train_<term>`` (batch
+        One dict per epoch, with ``epoch``, ``seconds``, ``train_total`` and ``train_<term>`` (batch
         means), and when there are validation rows ``val_region_acc`` (known regions only),
         ``val_person_mae``, ``val_forward_acc``, ``val_depth_mae`` (metres, cells with a
         reading), for the targets given.

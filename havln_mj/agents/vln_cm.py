@@ -60,7 +60,8 @@ class CMConfig:
             raise InvalidArgumentError(f"CMConfig.dropout must be in [0, 1), got {self.dropout!r}")
 
 
-START = N_ACTIONS  # the "previous action" token of the first step
+START = N_ACTIONS
+"""The "previous action" token of the first step."""
 
 
 def masked_logits(logits: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:

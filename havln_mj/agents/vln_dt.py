@@ -418,7 +418,7 @@ def sample_windows(
             :class:`DTPolicy` divides by ``cfg.rtg_scale``).
 
     Returns:
-        CPU tensors: the :meth:`DecisionTransformer.forward` arguments ``instruction (B, L)``,
+        CPU tensors, the :meth:`DecisionTransformer.forward` arguments ``instruction (B, L)``,
         ``obs (B, K, D)``, ``actions (B, K)``, ``rtg (B, K)``, ``timesteps (B, K)``,
         ``step_mask (B, K)``, ``action_mask (B, K, n_actions)``, plus ``targets (B, K)`` (the
         logged actions, 0 at padding) and ``loss_mask (B, K)`` (the real steps).

@@ -28,10 +28,10 @@ from havln_mj.humans.population import ha3d_heading, read_ha3d_placements
 from havln_mj.scene.navgraph import NavGraph
 
 MODELS = (0, 1, 2)
-"""HA3D's motion model ids: the three motions generated for each activity sentence."""
+"""HA3D's motion model ids, one for each of the three motions made per activity sentence."""
 
 HA3D_NAME = {code: name for name, code in HA3D_REGIONS.items()}
-"""HA3D's region name (the part of a sentence before ':') of each region label code."""
+"""HA3D's region name (the part of a sentence before the colon) of each region label code."""
 
 
 @dataclass(frozen=True)

@@ -184,7 +184,9 @@ class _Handler(http.server.BaseHTTPRequestHandler):
 
 
 class AnnotationServer(http.server.HTTPServer):
-    """Serves one :class:`AnnotationSession` on ``host:port`` (port 0 picks a free one).
+    """Serves one annotation session on ``host:port`` (port 0 picks a free one).
+
+    The session is an :class:`~havln_mj.annotator.session.AnnotationSession`.
 
     Args:
         session: The scan being annotated.

@@ -4,9 +4,10 @@ This is the only package that imports ray; the simulator core and :mod:`havln_mj
 stay ray-free. Every entry point takes an ``address``: None starts (or joins) a local Ray,
 ``"auto"`` joins the running cluster, ``"ray://host:10001"`` a remote one through Ray Client.
 
-* :func:`evaluate_split_ray`: :func:`havln_mj.eval.run.evaluate_split` sharded over Ray actors
+* :func:`~havln_mj.distributed.evaluate.evaluate_split_ray`:
+  :func:`havln_mj.eval.run.evaluate_split` sharded over Ray actors
   (same per-instruction metrics and summary); ``python -m havln_mj.distributed.evaluate``.
-* :func:`build_scenes_ray`: ``havln_mj scenes build`` as Ray tasks.
+* :func:`~havln_mj.distributed.builds.build_scenes_ray`: ``havln_mj scenes build`` as Ray tasks.
 """
 
 from __future__ import annotations

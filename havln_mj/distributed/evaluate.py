@@ -4,7 +4,7 @@ Takes every argument of ``python -m havln_mj.eval`` plus ``--workers`` (Ray acto
 owning a ``Simulator`` built like the single-process one) and ``--address`` (None: local Ray;
 ``auto``: the running cluster; ``ray://host:10001``: Ray Client). The instructions are cut
 into contiguous shards, run on the actors, merged back in the original order and scored
-once in the driver with the same :class:`havln_mj.tasks.metrics.Evaluator`, so the
+once in the driver with the same :class:`~havln_mj.tasks.metrics.evaluator.Evaluator`, so the
 per-instruction metrics and the summary equal :func:`havln_mj.eval.run.evaluate_split`'s
 (only ``seconds`` and ``instructions_per_s`` differ).
 

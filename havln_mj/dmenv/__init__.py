@@ -1,8 +1,8 @@
 """A ``dm_env`` adapter for dm_control users (the ``dm`` extra: ``pip install havln_mj[dm]``).
 
-:func:`load` makes a :class:`~havln_mj.dmenv.environment.HAVLNEnvironment` for one of the
-action sets (``"graph"``, ``"ego"``, ``"robot"``); the simulator core never imports
-``dm_env``.
+:func:`~havln_mj.dmenv.environment.load` makes a
+:class:`~havln_mj.dmenv.environment.HAVLNEnvironment` for one of the action sets (``"graph"``,
+``"ego"``, ``"robot"``); the simulator core never imports ``dm_env``.
 
 Example:
     >>> from havln_mj import dmenv  # doctest: +SKIP

@@ -8,7 +8,7 @@ core), turned into ``dm_env`` terms:
   ``FIRST`` time step; ``step()`` on a fresh environment or after a ``LAST`` step resets.
 * STOP, a fall or diverged physics end the episode with a ``LAST`` step and discount 0; the
   step limit (:data:`MAX_STEPS`, per action set) ends it with discount 1 (truncation).
-* The latest step's ``info`` dictionary is :attr:`HAVLNEnvironment.info`.
+* The latest step's ``info`` dictionary is the environment's ``info`` attribute.
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ from havln_mj.tasks.episode_env import ACTION_SETS, EpisodeEnv, positive_int
 from havln_mj.tasks.observations import Field
 
 MAX_STEPS = {"graph": 40, "ego": 120, "robot": 200}
+"""The step limit of each action set."""
 """Step limit per action set (the gymnasium ids' ``max_episode_steps``)."""
 
 

@@ -22,6 +22,7 @@ ENV_IDS: dict[str, tuple[str, int]] = {
     "HAVLN-Ego-v0": ("havln_mj.gym.envs:EgoEnv", 120),
     "HAVLN-Go1-v0": ("havln_mj.gym.envs:Go1Env", 200),
 }
+"""The registered ids, each with its entry point and step limit."""
 
 
 def register_envs() -> None:

@@ -32,9 +32,6 @@ from havln_mj.humans.anny_data import (
 )
 from havln_mj.humans.skeleton import NUM_JOINTS
 
-# (id, gender 0 = male … 1 = female, age (0 baby, 1/3 child, 2/3 young adult, 1 old),
-#  muscle, weight, standing height in metres (Anny's height parameter is solved for it),
-#  proportions); Anny's parameters lie in [0, 1].
 PHENOTYPES = (
     ("boy-7", 0.0, 0.24, 0.5, 0.45, 1.22, 0.5),
     ("girl-7", 1.0, 0.24, 0.5, 0.5, 1.20, 0.5),
@@ -67,6 +64,9 @@ PHENOTYPES = (
     ("woman-elder-slim", 1.0, 0.97, 0.3, 0.3, 1.62, 0.5),
     ("woman-elder-heavy", 1.0, 0.93, 0.4, 0.8, 1.55, 0.5),
 )
+"""The catalog's phenotypes, each ``(id, gender 0 = male … 1 = female, age (0 baby, 1/3 child,
+2/3 young adult, 1 old), muscle, weight, standing height in metres (Anny's height parameter is
+solved for it), proportions)``; Anny's parameters lie in [0, 1]."""
 PHENOTYPE_LABELS = ("gender", "age", "muscle", "weight", "height", "proportions")
 TARGET_VERTICES = 3200
 ANNY_TO_BODY = np.diag([-1.0, -1.0, 1.0])  # Anny faces −y, ours +y: half a turn about z

@@ -31,7 +31,8 @@ from havln_mj.humans.skeleton import (
 )
 
 PELVIS_HEIGHT_FRACTION = 0.57  # our clips stand the pelvis this high (knees soft), × height
-OVERLAP_WEIGHT = 0.45  # a rigid piece also keeps faces this much bound to its joint
+OVERLAP_WEIGHT = 0.45
+"""A rigid piece also keeps the faces bound this much (skinning weight) to its joint."""
 
 # Limb joints corrected to our rest bone, by the child their bone points at.
 _LIMB_CHILD = {}

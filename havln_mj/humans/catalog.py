@@ -1,7 +1,7 @@
 """The activity catalog: what people do in each kind of room, and the motion that shows it.
 
 The catalog (``humans/activities.json``) is keyed by Matterport3D region label codes
-(:data:`havln_mj.scene.regions.REGION_LABELS`); every activity has a stable id, a short
+(:data:`~havln_mj.scene.regions.REGION_LABELS`); every activity has a stable id, a short
 sentence, a verb phrase for instructions, and a motion recipe with its parameters (the
 keyword arguments of the recipe in :mod:`havln_mj.humans.motion`; ``needs_seat`` marks
 sitting). :func:`make_clip` builds an activity's clip for one person, and

@@ -30,7 +30,7 @@ class PeopleDrawing:
     """How a crowd is drawn (see the module docstring for the calls)."""
 
     def __init__(self, crowd: Crowd, style: str = "pieces") -> None:
-        """Draws ``crowd`` in ``style`` (one of :data:`DRAW_STYLES`)."""
+        """Draws ``crowd`` in a ``style`` of :data:`~havln_mj.humans.mujoco_people.DRAW_STYLES`."""
         self.crowd = crowd
         self.style = style
 
@@ -47,7 +47,8 @@ class PeopleDrawing:
             solid: People's capsules make contacts (a simulated robot bumps into them).
 
         Raises:
-            InvalidArgumentError: The style is not one of :data:`DRAW_STYLES`.
+            InvalidArgumentError: The style is not one of
+                :data:`~havln_mj.humans.mujoco_people.DRAW_STYLES`.
         """
         add_people(spec, self.crowd.shapes, self.crowd.skins, solid, self.style)
 
@@ -80,7 +81,7 @@ class PeoplePoser:
         """Poses everyone at simulated time ``t`` (kinematics not run).
 
         Returns:
-            Ids of the meshes whose vertices changed: upload each to every renderer.
+            Ids of the meshes whose vertices changed, to upload to every renderer.
         """
         if not self._joints.n_people:
             return []  # nobody drawn

@@ -41,7 +41,7 @@ def body_name(person: int, joint: int) -> str:
 
 
 DRAW_STYLES = ("pieces", "skinned", "capsules")
-"""How people with an Anny look are drawn: rigid textured pieces on the joint bodies (no
+"""How people with an Anny look may be drawn, as rigid textured pieces on the joint bodies (no
 per-frame upload), one mesh skinned every frame, or the capsule mannequins."""
 
 

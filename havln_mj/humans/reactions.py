@@ -3,8 +3,8 @@
 A :class:`ReactiveCrowd` wraps a :class:`~havln_mj.humans.crowd.Crowd` and stays a pure
 function of (simulated time, the agent's track so far). The simulator hands it the track
 explicitly with :meth:`ReactiveCrowd.observe_agent` (the agent's sampled positions of each
-action, before asking about that action) and clears it with :meth:`forget_agent` at a new
-episode; before the first sample and after the last one the agent is taken to stand where it
+action, before asking about that action) and clears it with :meth:`~ReactiveCrowd.forget_agent` at a
+new episode; before the first sample and after the last one the agent is taken to stand where it
 was seen first and last. Without a track, or with reactions off, it answers exactly as the
 wrapped crowd.
 
@@ -31,9 +31,11 @@ from havln_mj.humans import rotations as rot
 from havln_mj.humans.crowd import Crowd, PersonState
 from havln_mj.humans.skeleton import JOINT
 
-STEP_S = 0.1  # seconds: a walker's clock is advanced (or held) in steps this long
+STEP_S = 0.1
+"""Seconds by which a walker's clock is advanced (or held) at a time."""
 WALKER_RANGE_M = 0.5  # a clip whose pelvis roams farther than this walks
-MAX_GLANCE_RAD = 1.2  # how far a head turns toward the agent
+MAX_GLANCE_RAD = 1.2
+"""How far (radians) a head turns toward the agent."""
 
 
 @dataclass(frozen=True)

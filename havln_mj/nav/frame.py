@@ -74,7 +74,7 @@ class GridFrame:
 
     @property
     def shape(self) -> tuple[int, int]:
-        """(H, W): rows (along y) and columns (along x)."""
+        """Rows (along y) and columns (along x), ``(H, W)``."""
         return self._shape
 
     @property

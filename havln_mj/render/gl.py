@@ -1,11 +1,11 @@
 """OpenGL backend selection and the one shared GL context of the process.
 
-One GL context per process is a requirement of the architecture: every :class:`Camera` in a
-process renders through the same context, each with its own MuJoCo ``MjrContext`` (its own
-offscreen framebuffer, textures and display lists). The context is the one sanctioned
-process-wide object of ``havln_mj``; it is reached only through :func:`acquire` and
-:func:`release`, which keep a reference count: the first :func:`acquire` creates the context,
-the last :func:`release` frees it.
+One GL context per process is a requirement of the architecture: every
+:class:`~havln_mj.render.camera.Camera` in a process renders through the same context, each with its
+own MuJoCo ``MjrContext`` (its own offscreen framebuffer, textures and display lists). The context
+is the one sanctioned process-wide object of ``havln_mj``; it is reached only through
+:func:`acquire` and :func:`release`, which keep a reference count: the first :func:`acquire` creates
+the context, the last :func:`release` frees it.
 
 Backend choice (:func:`backend_order` holds the pure decision, testable without GL):
 

@@ -95,12 +95,12 @@ class Connectivity:
 
     @property
     def positions(self) -> np.ndarray:
-        """(N, 3) viewpoint positions: ``pose[3], pose[7], pose[11]``."""
+        """Viewpoint positions ``pose[3], pose[7], pose[11]``, shape ``(N, 3)``."""
         return self.poses[:, :3, 3].copy()
 
     @property
     def floor_z(self) -> np.ndarray:
-        """(N,) floor height under each viewpoint: position z minus ``height``."""
+        """Floor height under each viewpoint (position z minus ``height``), shape ``(N,)``."""
         return self.poses[:, 2, 3] - self.heights
 
 

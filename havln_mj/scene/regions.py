@@ -23,7 +23,6 @@ import numpy as np
 from havln_mj.cache import atomic_write_json
 from havln_mj.errors import MalformedDataError, MissingDataError
 
-# Matterport3D region label codes (house_segmentations .house "R" lines).
 REGION_LABELS: dict[str, str] = {
     "a": "bathroom",
     "b": "bedroom",
@@ -57,6 +56,7 @@ REGION_LABELS: dict[str, str] = {
     "Z": "junk",
     "-": "no label",
 }
+"""Matterport3D region label codes (the ``R`` lines of a ``.house`` file) and their names."""
 
 
 @dataclass(frozen=True)

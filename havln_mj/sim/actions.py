@@ -94,8 +94,9 @@ def parse_mixed(
 ) -> tuple[list[GraphStep], list[str]]:
     """Splits one action of any kind per element into graph steps and robot actions.
 
-    A graph action is ``(index, dHeading, dElevation)``, an :class:`EgoAction` becomes its
-    graph step (none for STOP), a string is a robot action, None leaves the element alone.
+    A graph action is ``(index, dHeading, dElevation)``, an
+    :class:`~havln_mj.sim.egocentric.EgoAction` becomes its graph step (none for STOP), a string is
+    a robot action, None leaves the element alone.
 
     Returns:
         The graph steps, and one robot action per element (``"stop"``: none).

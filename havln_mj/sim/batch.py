@@ -38,7 +38,8 @@ from havln_mj.sim.viewing import (
     discrete_view,
 )
 
-WAIT_S = 1.0  # seconds a "stay" action without rotation lasts
+WAIT_S = 1.0
+"""Seconds that an action which neither moves nor turns (a wait) lasts."""
 
 FilmCallback = Callable[[int, float, list[View], np.ndarray], None]
 
@@ -109,7 +110,7 @@ class Batch:
     def start(self, starts: Sequence[tuple[NavTable, Crowd, str, float, float]]) -> None:
         """New episodes: ``(table, crowd, viewpoint, heading, elevation)`` per element.
 
-        With :attr:`reactions` on, each element's people are its own: they react to that
+        With ``reactions`` on, each element's people are its own: they react to that
         element's body alone.
         """
         elements = []

@@ -33,10 +33,10 @@ ARRIVAL_M = 0.3
 this height of the viewpoint's floor, stands at that viewpoint."""
 
 Knots = Sequence[Sequence[float]] | np.ndarray
-"""A body's track over an action: rows ``(t, x, y, z)`` of its base, linear in between."""
+"""A body's track over an action, as rows ``(t, x, y, z)`` of its base, linear in between."""
 
 Observe = Callable[[Knots], None]
-"""Tells the people (those who react) where the body went: its knots over an action."""
+"""Tells the people (those who react) where the body went, given its knots over an action."""
 
 
 def ignore(knots: Knots) -> None:
@@ -47,7 +47,7 @@ class Film:
     """Frames to draw during actions, at ``fps`` frames per simulated second.
 
     A kinematic body, which can pose itself at any moment, asks :meth:`times` for the frame
-    times of an action and calls :attr:`draw` at each, drawn pose set; a physics body calls
+    times of an action and calls ``draw`` at each, drawn pose set; a physics body calls
     :meth:`tick` at every controller tick, and a frame is drawn when one is due.
 
     Args:
@@ -111,8 +111,8 @@ class Body(Protocol):
     """The viewpoint the body stands at."""
 
     observe: Observe
-    """Called with the body's knots as soon as they are known: before the frames of a
-    kinematic move are drawn, after a physical one (people who react see them)."""
+    """Called with the body's knots as soon as they are known (before the frames of a
+    kinematic move are drawn, after a physical one), so that people who react see them."""
 
     def start(self, viewpoint: str, heading: float, elevation: float, t: float) -> Outcome:
         """Places the body at ``viewpoint`` facing ``heading`` at time ``t`` (an instant)."""
@@ -255,3 +255,4 @@ def make_kind(
 
 
 BODY_KINDS = ("point", "go1")
+"""The bodies a simulator can have (MatterSim's point camera rig, or the simulated GO1)."""

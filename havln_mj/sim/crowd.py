@@ -24,9 +24,12 @@ from typing import NamedTuple, Protocol
 
 import numpy as np
 
-COLLISION_DISTANCE = 1.0  # metres, HA-VLN's threshold
+COLLISION_DISTANCE = 1.0
+"""HA-VLN's collision threshold in metres (horizontal, from the agent's base to a pelvis)."""
 SAMPLE_HZ = 16.0
-NEAR_M = 3.0  # metres: people farther than this from an action are not sampled
+"""The lowest rate, per simulated second, at which an action's track is checked for people."""
+NEAR_M = 3.0
+"""People farther than this (metres) from an action's whole track are not sampled."""
 
 
 class Crowd(Protocol):
@@ -101,6 +104,7 @@ class _NoCrowd:
 
 
 NO_CROWD: Crowd = _NoCrowd()
+"""The crowd of a scene without people."""
 
 
 class Proximity(NamedTuple):

@@ -14,11 +14,11 @@ Matterport3DSimulator's ``MatterSim.Simulator``). On top of MatterSim:
 * **Clock**: every action advances the element's simulated time (``state.time``) by its
   duration: the move at ``speed`` m/s, then the turn at ``turn_rate`` rad/s (the larger of
   the heading and elevation change); an action that neither moves nor turns is a wait of
-  :data:`WAIT_S`. People are a function of that time. In a graph proxy the point body walks
-  an edge stored with a route (a line of sight across a stairwell) along that route, through
-  its viewpoints: the move lasts the route's length at ``speed``, and the collision signal is
-  sampled along it (with rendering off a real scan id has no proxy, and every edge is
-  straight, as in MatterSim).
+  :data:`~havln_mj.sim.batch.WAIT_S`. People are a function of that time. In a graph proxy
+  the point body walks an edge stored with a route (a line of sight across a stairwell) along
+  that route, through its viewpoints: the move lasts the route's length at ``speed``, and the
+  collision signal is sampled along it (with rendering off a real scan id has no proxy, and every
+  edge is straight, as in MatterSim).
 * **Egocentric actions** (HA-VLN): ``makeEgoAction`` (see :mod:`havln_mj.sim.egocentric`).
 * **Images**: BGR ``uint8`` and ``uint16`` depth in 0.25 mm units, as MatterSim; RGB and
   ``float32`` metres on request (``set_color_order``, ``set_depth_units``). Every image comes
@@ -417,7 +417,8 @@ class Simulator(SimulatorSettings):
 
         An extension of MatterSim (HA3D's frame counter, made explicit): people go on moving,
         the collision signal covers the whole wait, and the state (images included) is that
-        at the end. ``makeAction`` with index 0 and no turn is the same with :data:`WAIT_S`.
+        at the end. ``makeAction`` with index 0 and no turn is the same with
+        :data:`~havln_mj.sim.batch.WAIT_S`.
 
         Raises:
             NotInitializedError: No episode has been started.
@@ -438,7 +439,7 @@ class Simulator(SimulatorSettings):
         self._timers["process"] += time.perf_counter() - t0
 
     def makeRobotAction(self, action: Sequence[str]) -> None:  # noqa: N802
-        """A robot's continuous actions, one per element (:data:`ROBOT_ACTIONS`).
+        """One robot action per element, of :data:`~havln_mj.sim.body.ROBOT_ACTIONS`.
 
         With the GO1, ``"forward"`` walks :attr:`~havln_mj.sim.legged.LeggedOptions.forward_m`,
         ``"turn_left"``/``"turn_right"`` turn by ``turn_rad``, ``"stop"`` leaves the element
@@ -463,8 +464,9 @@ class Simulator(SimulatorSettings):
         An extension of MatterSim for task code that steps elements independently: a graph
         action is a tuple ``(index, dHeading, dElevation)`` (as ``makeAction``), an
         :class:`~havln_mj.sim.egocentric.EgoAction` member an egocentric action (STOP leaves
-        the element alone), a string a robot action of :data:`ROBOT_ACTIONS` (``"stop"``
-        leaves it alone). The whole batch is checked before anything moves.
+        the element alone), a string a robot action of
+        :data:`~havln_mj.sim.body.ROBOT_ACTIONS` (``"stop"`` leaves it alone). The whole batch is
+        checked before anything moves.
 
         Raises:
             NotInitializedError: No episode has been started.

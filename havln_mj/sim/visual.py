@@ -105,7 +105,7 @@ def add_visual_parts(
             lights looks closer to the photographs).
 
     Returns:
-        The number of geoms added: one per part, less the parts skipped for having no
+        The number of geoms added, one per part, less the parts skipped for having no
         surface (their index ``k`` is left unused, so names stay tied to ``parts``).
 
     Raises:

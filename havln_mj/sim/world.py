@@ -30,6 +30,8 @@ if TYPE_CHECKING:
     import trimesh
 
 COLLISION_MODES = ("auto", "boxes", "coacd", "none")
+"""How a world's collision geometry can be made, ``auto`` (exact boxes where the scan has them,
+else CoACD hulls of the mesh), ``boxes``, ``coacd``, or ``none``."""
 
 
 @dataclass(frozen=True)

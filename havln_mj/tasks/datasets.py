@@ -36,6 +36,7 @@ from havln_mj.scene.navgraph import NavGraph
 from havln_mj.tasks.episodes import REL_POSITIONS, Dataset, Episode, HumanOnPath
 
 SPLITS = ("train", "val_seen", "val_unseen", "test")
+"""The splits of R2R and HA-R2R."""
 PREFIXES = ("R2R", "HA")  # file stems as distributed: R2R_<split>.json, HA_<split>.json
 DATA_ENV = "HAVLN_VLN_DATA"
 # HA-R2R key names; the order is the files' own and the one ``write_dataset`` uses.

@@ -44,7 +44,9 @@ def forward_target(
     return best
 
 
-TURN_COST = 1e-3  # metres an egocentric turn "costs": fewest turns among shortest routes
+TURN_COST = 1e-3
+"""Metres that an egocentric turn costs in a plan, so that the plan takes the fewest turns
+among the shortest routes."""
 
 
 def ego_plan(

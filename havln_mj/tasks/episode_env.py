@@ -95,8 +95,8 @@ class EpisodeEnv:
         render: Whether frames are rendered for ``render()`` even without image fields.
         max_depth: Depth is clipped to this (metres).
         instruction_length: Token ids per instruction (longer ones are cut).
-        vocab: A :class:`Vocabulary`, a token list, a ``vocab_<split>.txt`` file, or None to
-            build it from the episodes' instructions.
+        vocab: A :class:`~havln_mj.tasks.vocab.Vocabulary`, a token list, a ``vocab_<split>.txt``
+            file, or None to build it from the episodes' instructions.
         max_candidates: Navigable viewpoints described (and, in the graph set, actions).
         restricted_navigation: MatterSim's field-of-view rule for navigable viewpoints.
         reward: A reward name of :data:`havln_mj.tasks.rewards.REWARDS` or a function.
@@ -271,7 +271,7 @@ class EpisodeEnv:
         return self._observe(self._last), self.info(self._last, False)
 
     def check_action(self, action: object) -> int:
-        """``action`` as an int of the action set, else :class:`InvalidActionError`."""
+        """``action`` as an int of the action set (else an ``InvalidActionError``)."""
         if isinstance(action, np.ndarray) and action.shape == ():
             action = action.item()
         n = self.n_actions

@@ -202,10 +202,10 @@ class HumanAwareExpert:
     """HA3D's sub-optimal expert: avoids the nodes near people, waits when boxed in.
 
     With egocentric actions (``action_space="ego"``, the teacher of the egocentric agents)
-    it follows :func:`ego_plan` with FORWARD kept out of the avoided nodes. The egocentric set
-    has no wait, and HA3D's "no path" answer is the STOP tuple, which would teach an agent to
-    stop beside people; so when no route avoids them it takes the shortest egocentric route
-    regardless, counting the step in ``waits``.
+    it follows :func:`~havln_mj.tasks.ego_routes.ego_plan` with FORWARD kept out of the avoided
+    nodes. The egocentric set has no wait, and HA3D's "no path" answer is the STOP tuple, which
+    would teach an agent to stop beside people; so when no route avoids them it takes the shortest
+    egocentric route regardless, counting the step in ``waits``.
 
     Args:
         mode: ``"local"`` re-plans each step around the people within ``sight_radius`` of

@@ -5,23 +5,23 @@ simulator state; the gymnasium environments turn the fields into ``spaces`` and 
 ``dm_env`` adapter into ``specs``, so both hand out the same arrays. ``H×W`` is
 ``height×width``:
 
-=================  ==========================================================================
-``rgb``            ``H×W×3 uint8`` RGB camera image (unless ``rgb=False``)
-``depth``          ``H×W×1 float32`` planar depth in metres, 0 = no reading, clipped to
-                   ``max_depth`` (only with ``depth=True``)
-``human_mask``     ``H×W uint8``, 1 where a person is seen (only with ``human_mask=True``)
-``instruction``    ``L int64`` token ids of the vocabulary, 0-padded (``L`` =
-                   ``instruction_length``)
-``heading``        ``(1,) float32`` radians in [0, 2π), 0 facing +y, right positive
-``elevation``      ``(1,) float32`` radians, up positive
-``candidates``     ``(K+1)×4 float32``: row 0 is the agent's own location (zeros), row k ≥ 1
-                   the k-th navigable viewpoint (nearest the view centre first):
-                   ``sin rel_heading, cos rel_heading, rel_elevation, rel_distance`` (metres,
-                   clipped to 50); zeros where there is none (``K`` = ``max_candidates``)
-``candidate_mask`` ``(K+1,) int8``, binary: 1 for row 0 and for every row holding a viewpoint
-``collision``      ``() int64`` in {0, 1}: 1 when the last action (or the start) came within
-                   the collision distance of a person
-=================  ==========================================================================
+================== ==========================================================================
+``rgb``             ``H×W×3 uint8`` RGB camera image (unless ``rgb=False``)
+``depth``           ``H×W×1 float32`` planar depth in metres, 0 = no reading, clipped to
+                    ``max_depth`` (only with ``depth=True``)
+``human_mask``      ``H×W uint8``, 1 where a person is seen (only with ``human_mask=True``)
+``instruction``     ``L int64`` token ids of the vocabulary, 0-padded (``L`` =
+                    ``instruction_length``)
+``heading``         ``(1,) float32`` radians in [0, 2π), 0 facing +y, right positive
+``elevation``       ``(1,) float32`` radians, up positive
+``candidates``      ``(K+1)×4 float32``: row 0 is the agent's own location (zeros), row k ≥ 1
+                    the k-th navigable viewpoint (nearest the view centre first):
+                    ``sin rel_heading, cos rel_heading, rel_elevation, rel_distance`` (metres,
+                    clipped to 50); zeros where there is none (``K`` = ``max_candidates``)
+``candidate_mask``  ``(K+1,) int8``, binary: 1 for row 0 and for every row holding a viewpoint
+``collision``       ``() int64`` in {0, 1}: 1 when the last action (or the start) came within
+                    the collision distance of a person
+================== ==========================================================================
 
 Every observation holds fresh arrays: consecutive observations share no memory.
 """

@@ -25,6 +25,7 @@ from havln_mj.scene.regions import REGION_LABELS
 from havln_mj.tasks.episodes import REL_POSITIONS
 
 TURNS = ("straight", "slight left", "slight right", "left", "right", "around")
+"""The kinds of turn a route step takes, gentlest first."""
 _PERSON = ("who", "Who", "verb", "where", "Where_lead")
 
 

@@ -9,8 +9,8 @@ path gets three instructions from :mod:`havln_mj.tasks.instructions`.
 
 :func:`build_split` writes ``HA_<split>.json`` (read it with
 :func:`havln_mj.tasks.datasets.load_dataset`) and ``vocab_<split>.txt``: one token per line,
-``token<TAB>count``, most frequent first (ties alphabetical), counting :func:`tokenize` tokens
-of every instruction.
+``token<TAB>count``, most frequent first (ties alphabetical), counting
+:func:`~havln_mj.tasks.instructions.tokenize` tokens of every instruction.
 """
 
 from __future__ import annotations

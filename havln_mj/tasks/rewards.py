@@ -22,7 +22,9 @@ from dataclasses import dataclass
 
 from havln_mj.errors import InvalidArgumentError, did_you_mean
 
-SUCCESS_DISTANCE = 3.0  # metres; success is strictly closer (HA3D: dist < 3.0)
+SUCCESS_DISTANCE = 3.0
+"""A STOP succeeds strictly closer than this to the goal (geodesic metres), as HA3D's
+``dist < 3.0``."""
 
 
 @dataclass(frozen=True)
@@ -43,6 +45,7 @@ class StepOutcome:
 
 
 RewardFn = Callable[[StepOutcome], dict[str, float]]
+"""A reward function, giving the named reward terms of one step's outcome (they are summed)."""
 
 
 def _target(o: StepOutcome) -> float:
@@ -102,6 +105,7 @@ REWARDS: dict[str, RewardFn] = {
     "strategy_5": strategy_5,
     "strategy_6": strategy_6,
 }
+"""The reward functions by name (the paper's terms and HA3D's six strategies)."""
 
 
 def step_reward(fn: RewardFn, outcome: StepOutcome) -> float:

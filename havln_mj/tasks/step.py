@@ -12,10 +12,11 @@ a :class:`TaskStep`, so one rule holds everywhere:
 * **Collision**: the start state counts (an agent placed within the collision distance of a
   person has collided), then every action's ``isCrushed`` (the simulator's signal along the
   whole action); STOP never collides.
-* **Goal distance**: :meth:`Simulator.getGeodesicDistance` — from where the body truly is (the
-  GO1's true pose on its level's navigability grid), the same for every caller.
+* **Goal distance**: :meth:`~havln_mj.sim.simulator.Simulator.getGeodesicDistance` — from where the
+  body truly is (the GO1's true pose on its level's navigability grid), the same for every caller.
 * **Reward**: the terms of :mod:`havln_mj.tasks.rewards` times their weights.
-* **Success**: STOP strictly closer than :data:`SUCCESS_DISTANCE` to the goal.
+* **Success**: STOP strictly closer than :data:`~havln_mj.tasks.rewards.SUCCESS_DISTANCE` to the
+  goal.
 * **End**: STOP, a fall or diverged physics (terminated), or the step cap (truncated).
 """
 

@@ -82,7 +82,7 @@ class LoadedMotion(Clip):
 
 
 def check_path(path: str | Path, what: str) -> Path:
-    """The path as a :class:`Path`; raises :class:`MissingDataError` if it is not a file."""
+    """The path as a ``Path``; raises :class:`~havln_mj.errors.MissingDataError` if no file."""
     path = Path(path)
     if not path.is_file():
         raise MissingDataError(f"{what} not found: {path}")
@@ -125,7 +125,7 @@ def array(
 
 
 def check_fps(fps: float | None) -> None:
-    """Raises :class:`InvalidArgumentError` unless ``fps`` is None or positive."""
+    """Raises :class:`~havln_mj.errors.InvalidArgumentError` unless ``fps`` is None or > 0."""
     if fps is not None and not (np.isfinite(fps) and fps > 0):
         raise InvalidArgumentError(f"fps must be positive, got {fps!r}")
 

@@ -1,8 +1,9 @@
 """Procedural human motion: recipes that build looping clips, and blending between clips.
 
-Every recipe returns a :class:`~havln_mj.humans.clip.Clip` at :data:`FPS` in the person's
-anchor frame (origin on the floor at their spot, z up, facing +y) for a person of a given
-height, varied per person by the ``numpy.random.Generator`` it is given.
+Every recipe returns a :class:`~havln_mj.humans.clip.Clip` at
+:data:`~havln_mj.humans.motion.gait.FPS` in the person's anchor frame (origin on the floor at their
+spot, z up, facing +y) for a person of a given height, varied per person by the
+``numpy.random.Generator`` it is given.
 """
 
 from havln_mj.humans.motion.behaviours import (

@@ -2,9 +2,9 @@
 
 The anchor frame has its origin on the floor at the person's spot, z up, and the person
 facing +y. Standing recipes keep both feet planted (the legs follow the pelvis by IK), so
-no foot slides; walking recipes plant their footsteps (:mod:`.gait`). Every recipe draws
-its small per-person variations (amplitudes, phases, rates) from the ``rng`` it is given,
-so one seed always gives the same clip and two seeds give different ones. Periodic
+no foot slides; walking recipes plant their footsteps (:mod:`~havln_mj.humans.motion.gait`). Every
+recipe draws its small per-person variations (amplitudes, phases, rates) from the ``rng`` it is
+given, so one seed always gives the same clip and two seeds give different ones. Periodic
 motions use whole numbers of cycles per loop so the loop is seamless.
 """
 
@@ -30,7 +30,8 @@ BOOK = (0.37, 1.27, 0.1, 0.4)  # holding something in front of the chest
 GESTURE = (0.18, 1.4, 0.14, 0.13)  # forearms up, hands at chest height
 COUNTER = (0.55, 1.1, 0.1, 0.3)  # hands working at a counter in front of the waist
 OVERHEAD = (2.85, 0.15, 0.1, 0.0)
-SEAT_CLEARANCE = 0.08  # pelvis joint above the seat when sitting, fraction of height
+SEAT_CLEARANCE = 0.08
+"""Height of the pelvis joint above the seat when sitting, as a fraction of body height."""
 REACH_KINDS = ("up", "down", "forward")
 EXERCISE_KINDS = ("squat", "stretch", "jumping_jacks")
 SIT_POSES = ("rest", "read", "talk")

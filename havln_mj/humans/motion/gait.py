@@ -3,12 +3,12 @@
 The walker's pelvis follows a :class:`~havln_mj.humans.motion.route.Route`. Feet alternate
 at a constant cadence (cycle time from speed and height, so stride = speed × cycle); each
 foot is planted for 60 % of the cycle at a footprint beside the route, swings 40 % to the
-next one, and rolls heel-to-toe while planted (:func:`joints.ankle_from_contact`), so the
-planted foot does not slide. The foot's pitch over the cycle comes from the myosuite sample
-gait cycle (hip − knee + ankle sagittal angles, facts in the project's SMPL reference),
-scaled by the step length; hip and knee follow from leg IK. The pelvis bobs, sways, rolls,
-tilts and yaws with the published amplitudes, and is lowered where a leg could not reach.
-Arms swing opposite the legs.
+next one, and rolls heel-to-toe while planted
+(:func:`~havln_mj.humans.motion.joints.ankle_from_contact`), so the planted foot does not slide. The
+foot's pitch over the cycle comes from the myosuite sample gait cycle (hip − knee + ankle sagittal
+angles, facts in the project's SMPL reference), scaled by the step length; hip and knee follow from
+leg IK. The pelvis bobs, sways, rolls, tilts and yaws with the published amplitudes, and is lowered
+where a leg could not reach. Arms swing opposite the legs.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from havln_mj.humans.motion.route import Route
 from havln_mj.humans.skeleton import JOINT, NUM_JOINTS, rest_offsets, rest_positions
 
 FPS = 30.0
+"""Frames per second of the procedural clips."""
 STANCE = 0.6  # fraction of the cycle a foot is planted
 FOOTPRINT_PHASE = 0.25  # the planted ankle is under the hip here (fits the hip range best)
 REFERENCE_HEIGHT = 1.75  # metres; cadence scales with sqrt(height / this)

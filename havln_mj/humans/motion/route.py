@@ -17,8 +17,10 @@ import numpy as np
 
 from havln_mj.errors import InvalidArgumentError
 
-PIVOT_ANGLE = math.radians(100.0)  # sharper corners are turned on the spot
-MAX_TURN_RATE = math.radians(90.0)  # rad/s of heading change while walking an arc
+PIVOT_ANGLE = math.radians(100.0)
+"""Corners sharper than this (radians) are turned on the spot."""
+MAX_TURN_RATE = math.radians(90.0)
+"""Fastest heading change (rad/s) while walking an arc."""
 CORNER_RADIUS = 0.6  # metres, largest arc radius of a rounded corner
 ACCEL = 0.8  # m/s², speeding up and slowing down
 _DS = 0.01  # metres between route samples

@@ -29,7 +29,7 @@ class TrotGait:
     """Trot pattern generator: twist in, 12 joint targets out.
 
     Call :meth:`start` to begin walking, :meth:`step` every control tick, :meth:`request_stop`
-    to end with every foot down (each pair swings once more); :attr:`walking` turns false
+    to end with every foot down (each pair swings once more); ``walking`` turns false
     when they have.
     """
 

@@ -99,7 +99,7 @@ class PrimitiveResult:
 
     @property
     def error(self) -> float:
-        """Achieved minus target: metres for forward, radians for turn, 0 for stand."""
+        """Achieved minus target, in metres for forward, radians for turn, 0 for stand."""
         if self.kind == "forward":
             return self.distance - self.target
         if self.kind == "turn":

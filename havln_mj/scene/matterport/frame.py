@@ -111,7 +111,7 @@ def check_frame(
         mesh: The building's mesh in the z-up world frame (e.g.
             :func:`havln_mj.scene.mesh.parts_to_trimesh` of the loaded parts).
         connectivity: The scan's viewpoints.
-        tolerance: Largest |floor hit − (z − height)| that counts as agreeing, metres.
+        tolerance: Largest ``|floor hit − (z − height)|`` that counts as agreeing, metres.
         min_fraction: Smallest share of sampled viewpoints that must agree.
         max_viewpoints: Most viewpoints checked (evenly spread; deterministic).
 

@@ -1,7 +1,8 @@
-"""Parse a Matterport3D ``.house`` file (house_segmentations) into :class:`Regions`.
+"""Parse a Matterport3D ``.house`` file (house_segmentations) into regions.
 
-The file is ASCII: a first line ``ASCII 1.1``, then one record per line, fields separated by
-runs of spaces, the record type first (see ``matterport_data_organization.md``)::
+The result is a :class:`~havln_mj.scene.regions.Regions`. The file is ASCII: a first line
+``ASCII 1.1``, then one record per line, fields separated by runs of spaces, the record type first
+(see ``matterport_data_organization.md``)::
 
     H name label #images #panoramas #vertices #surfaces #segments #objects #categories
       #regions #portals #levels 0 0 0 0 0 xlo ylo zlo xhi yhi zhi 0 0 0 0 0
@@ -19,12 +20,12 @@ runs of spaces, the record type first (see ``matterport_data_organization.md``):
 What is read:
 
 - **Levels** (``L``): ``z_floor`` = bbox ``zlo``, ``z_ceiling`` = bbox ``zhi``.
-- **Regions** (``R``): level, label code (codes outside :data:`REGION_LABELS` become ``-``),
-  bbox and height. The floor polygon is the vertex loop (``V``, in file order) of the
-  region's floor surface (``S``): among its surfaces whose normal points up (``nz ≥ 0.5``, or
-  all of them if none does), the one with the largest area. It is made counter-clockwise.
-  A region without a usable surface (fewer than 3 vertices, zero area) gets its bbox
-  rectangle. Regions are renumbered 0..N-1 in index order if the file skips indices.
+- **Regions** (``R``): level, label code (codes outside
+  :data:`~havln_mj.scene.regions.REGION_LABELS` become ``-``), bbox and height. The floor polygon is
+  the vertex loop (``V``, in file order) of the region's floor surface (``S``): among its surfaces
+  whose normal points up (``nz ≥ 0.5``, or all of them if none does), the one with the largest area.
+  It is made counter-clockwise. A region without a usable surface (fewer than 3 vertices, zero area)
+  gets its bbox rectangle. Regions are renumbered 0..N-1 in index order if the file skips indices.
 - **Objects** (``O``): category from its ``C`` line (``category_mapping_name`` with ``#``
   read as a space; ``mpcat40_name``), or ``unknown``/``unlabeled`` for category -1. The
   oriented box (centre ``c``, unit axes ``a0``, ``a1``, ``a2 = a0 × a1``, radii ``r``) becomes

@@ -166,7 +166,7 @@ def plan_flights(
     """Flights for the ``wanted`` edges, where they fit, taken in turn.
 
     Each edge gets the first candidate :func:`choose_flight` takes. Then each edge none fit
-    tries moving each of the ``_MOVES`` walks most in its way (see :func:`_in_the_way`) out
+    tries moving each of the ``_MOVES`` walks most in its way (see ``_in_the_way``) out
     of it, in turn: a straight edge (its corridor is no longer drawn) or a flight. The move
     is made when, without that walk, a flight fits the edge, and then, with the edge's
     flight, one fits the walk too.

@@ -35,7 +35,7 @@ def dtw(cost: np.ndarray) -> float:
 def ndtw(
     graph: NavGraph, reference: Sequence[str], query: Sequence[str], threshold: float = 3.0
 ) -> float:
-    """Returns nDTW = exp(-DTW(R, Q) / (|R| * d_th)) over geodesic distances.
+    """Returns nDTW, ``exp(-DTW(R, Q) / (|R| * d_th))``, over geodesic distances.
 
     Args:
         graph: Supplies geodesic distances between viewpoints.
