@@ -72,6 +72,8 @@ def add_people(
         look = shape.look if skin is None and style != "capsules" else None
         # Rigid Anny pieces keep thinner capsules inside as fillers: where a bent joint opens
         # a crease between two pieces, the filler shows clothes or skin, not the room behind.
+        # Seen only there, they are low-poly meshes; solid people's fillers stay MuJoCo
+        # capsules, which also take the contacts.
         filler = look is not None and style == "pieces"
         pieces = shape.pieces() if skin is None and (look is None or solid or filler) else []
         bodies = [

@@ -13,6 +13,12 @@ track is sampled at :data:`SAMPLE_HZ` or faster, every knot included, so a perso
 through the agent's path mid-action is caught. Only people whose whole pelvis track
 (:meth:`Crowd.footprint`) comes within :data:`NEAR_M` of the track are sampled; the smallest
 distance reported is exact below ``NEAR_M`` and ``inf`` above.
+
+The signal runs on every action, so it is computed as a lookup: a crowd that offers
+``pelvis_table()`` (the humans package's does, see :mod:`havln_mj.humans.tracks`) has its
+people's pelvis tracks tabulated once and read at all of an action's samples, for all people
+and all of a batch's tracks among them, in one vectorised pass; who is near a straight track
+is remembered (:class:`NearMemo`). Other crowds are asked for :meth:`Crowd.positions`.
 """
 
 from __future__ import annotations
@@ -125,16 +131,22 @@ class Proximity(NamedTuple):
 NO_PROXIMITY = Proximity(False, (), math.inf)
 
 
-_STEPS = np.arange(4096, dtype=float)  # read-only sample indices for sample times
+_STEPS = np.arange(4096, dtype=float)  # sample indices, for sample times
 
 
-def _linspace(t0: float, t1: float, n: int) -> np.ndarray:
-    """``numpy.linspace(t0, t1, n)`` (same values) without its argument handling."""
+def _linspace(t0: float, t1: float, n: int, extra: Sequence[float] = ()) -> np.ndarray:
+    """``numpy.linspace(t0, t1, n)`` (the same values) then ``extra``, in one array.
+
+    Without linspace's argument handling and a concatenation: this runs on every action.
+    """
     if n > len(_STEPS):
-        return np.linspace(t0, t1, n)
-    times = _STEPS[:n] * ((t1 - t0) / (n - 1))
-    times += t0
-    times[-1] = t1
+        return np.concatenate([np.linspace(t0, t1, n), extra])
+    times = np.empty(n + len(extra))
+    np.multiply(_STEPS[:n], (t1 - t0) / (n - 1), out=times[:n])
+    times[:n] += t0
+    times[n - 1] = t1
+    if extra:
+        times[n:] = extra
     return times
 
 
@@ -290,16 +302,7 @@ def _samples(rows: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
         last = rows[-1]
         return np.array([t1]), np.array([complex(last[1], last[2])])
     n = max(2, math.ceil((t1 - t0) * SAMPLE_HZ) + 1)
-    inner = len(rows) - 2  # inner knots are samples too
-    if n + inner > len(_STEPS):
-        times = np.concatenate([_linspace(t0, t1, n), [r[0] for r in rows[1:-1]]])
-    else:
-        times = np.empty(n + inner)
-        np.multiply(_STEPS[:n], (t1 - t0) / (n - 1), out=times[:n])
-        times[:n] += t0
-        times[n - 1] = t1
-        if inner:
-            times[n:] = [r[0] for r in rows[1:-1]]
+    times = _linspace(t0, t1, n, [r[0] for r in rows[1:-1]])  # inner knots are samples too
     knot_t = np.array([r[0] for r in rows])
     knot_xy = np.array([complex(r[1], r[2]) for r in rows])
     return times, np.interp(times, knot_t, knot_xy)
@@ -336,7 +339,7 @@ def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> Non
     for (slot, _, _), row in zip(items, closest, strict=True):
         smallest = min(row)
         if smallest <= distance:
-            hit = tuple(sorted(k for k, v in zip(index, row, strict=True) if v <= distance))
+            hit = tuple([k for k, v in zip(index, row, strict=True) if v <= distance])
             out[slot] = Proximity(True, hit, smallest if smallest < NEAR_M else math.inf)
         elif smallest < NEAR_M:
             out[slot] = Proximity(False, (), smallest)

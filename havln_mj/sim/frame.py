@@ -139,11 +139,19 @@ class Frames:
         meshes = self.pose(data, t, camera, pitch)
         for mesh in meshes:
             cam.upload_mesh(mesh)
-        frame = cam.render(data, rgb=True, depth=settings.depth)
-        mask = None
-        if settings.human_mask:
-            ids = cam.render_geom_ids(data)
-            mask = (ids >= 0) & self._human_geoms[np.maximum(ids, 0)]
+        # People out of this camera's view are left out of its scene (the image is the same).
+        hidden = self._poser.hide_unseen(
+            data, self.model.camera(camera).id, settings.width / settings.height
+        )
+        try:
+            frame = cam.render(data, rgb=True, depth=settings.depth)
+            mask = None
+            if settings.human_mask:
+                ids = cam.render_geom_ids(data)
+                mask = (ids >= 0) & self._human_geoms[np.maximum(ids, 0)]
+        finally:
+            if hidden:
+                self._poser.show_all()
         return View(frame.rgb, frame.depth, mask)
 
     def close(self) -> None:
