@@ -17,14 +17,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
 from havln_mj import groups
-from havln_mj.humans.drawing import PeopleDrawing
-from havln_mj.render.camera import Camera
 from havln_mj.sim.crowd import Crowd
+
+if TYPE_CHECKING:
+    from havln_mj.render.camera import Camera
 
 
 @dataclass(frozen=True)
@@ -76,6 +78,9 @@ class Frames:
     def __init__(self, model: mujoco.MjModel, crowd: Crowd, style: str = "pieces") -> None:
         self.model = model
         self.crowd = crowd
+        # Drawing people and cameras: imported when a world is rendered, not with the simulator.
+        from havln_mj.humans.drawing import PeopleDrawing
+
         self._poser = PeopleDrawing(crowd, style).poser(model)
         self._human_geoms = model.geom_group == groups.HUMANS
         self._cameras: dict[str, tuple[Camera, ViewSettings]] = {}
@@ -113,6 +118,8 @@ class Frames:
                 return cam
             cam.close()
             del self._cameras[name]
+        from havln_mj.render.camera import Camera
+
         cam = Camera(self.model, name, settings.width, settings.height, math.degrees(settings.vfov))
         self._cameras[name] = (cam, settings)
         return cam

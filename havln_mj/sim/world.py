@@ -18,9 +18,6 @@ import numpy as np
 
 from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
-from havln_mj.humans.body import BodyShape
-from havln_mj.humans.mujoco_people import DRAW_STYLES, add_people
-from havln_mj.humans.skinned import Skin
 from havln_mj.robot.point_body import add_point_body
 from havln_mj.scene.collision import CoacdParams, decompose
 from havln_mj.scene.scan import Scan, floor_heights
@@ -28,6 +25,9 @@ from havln_mj.sim.visual import add_visual_parts, safe_name
 
 if TYPE_CHECKING:
     import trimesh
+
+    from havln_mj.humans.body import BodyShape
+    from havln_mj.humans.skinned import Skin
 
 COLLISION_MODES = ("auto", "boxes", "coacd", "none")
 """How a world's collision geometry can be made, ``auto`` (exact boxes where the scan has them,
@@ -64,6 +64,8 @@ class WorldOptions:
             raise InvalidArgumentError(
                 f"collision mode {self.collision!r} unknown; valid: {', '.join(COLLISION_MODES)}"
             )
+        from havln_mj.humans.mujoco_people import DRAW_STYLES  # people: not on import
+
         if self.people_style not in DRAW_STYLES:
             raise InvalidArgumentError(
                 f"people style {self.people_style!r} unknown; valid: {', '.join(DRAW_STYLES)}"
@@ -253,6 +255,8 @@ def build_world(
     Returns:
         The compiled world.
     """
+    from havln_mj.humans.mujoco_people import add_people  # people: not on import
+
     t0 = time.perf_counter()
     options = options or WorldOptions()
     spec, mode, n = world_spec(scan, options)
