@@ -15,13 +15,16 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 from tqdm import tqdm
 
+from havln_mj import argchecks
 from havln_mj.annotator import command as annotate_command
 from havln_mj.errors import HavlnError, InvalidArgumentError
+from havln_mj.scene.realscan import CONNECTIVITY_ENV, resolve_connectivity_dir
+from havln_mj.scene.scan import known_scene_ids
 from havln_mj.sim.prebuild import build_scene
 from havln_mj.sim.world import COLLISION_MODES
 
@@ -29,15 +32,17 @@ from havln_mj.sim.world import COLLISION_MODES
 def _scene_ids(args: argparse.Namespace) -> list[str]:
     ids = list(args.ids)
     if args.all_connectivity:
-        if args.connectivity_dir is None:
-            raise InvalidArgumentError("--all-connectivity needs --connectivity-dir")
+        conn_dir = resolve_connectivity_dir(args.connectivity_dir)
+        if conn_dir is None:
+            raise InvalidArgumentError(
+                f"--all-connectivity needs --connectivity-dir (or ${CONNECTIVITY_ENV})"
+            )
         ids += sorted(
-            p.name[: -len("_connectivity.json")]
-            for p in args.connectivity_dir.glob("*_connectivity.json")
+            p.name[: -len("_connectivity.json")] for p in conn_dir.glob("*_connectivity.json")
         )
     if not ids:
         raise InvalidArgumentError("no scene ids given (e.g. proc-0 proc-1, or --all-connectivity)")
-    return ids
+    return list(dict.fromkeys(ids))  # each scene once, in the order given
 
 
 def _summary(row: dict) -> str:
@@ -55,25 +60,45 @@ def _summary(row: dict) -> str:
     )
 
 
+def _report(scene: str, future: Future) -> int:
+    """Writes a built scene's line; returns 1 if it failed."""
+    try:
+        tqdm.write(_summary(future.result()))
+    except HavlnError as exc:
+        tqdm.write(f"{scene}: FAILED: {exc}")
+    except Exception as exc:  # a crash in one scene must not lose the others
+        tqdm.write(f"{scene}: FAILED unexpectedly ({type(exc).__name__}: {exc})")
+    else:
+        return 0
+    return 1
+
+
 def scenes_build(args: argparse.Namespace) -> int:
-    """Builds the scenes in parallel with a progress bar; prints one line per scene."""
+    """Builds the scenes in parallel with a progress bar; prints one line per scene.
+
+    A scene that fails is reported on its line and the others are still built.
+    """
     ids = _scene_ids(args)
+    problem = argchecks.scene_ids("scene ids", ids, known_scene_ids())
+    if problem:
+        raise InvalidArgumentError(problem)
+    workers, note = argchecks.worker_count(args.workers, len(ids))
+    if note:
+        print(note, file=sys.stderr)
     failures = 0
-    with ProcessPoolExecutor(max_workers=args.workers) as pool:
+    with ProcessPoolExecutor(max_workers=workers) as pool:
         futures = {
             pool.submit(build_scene, s, args.mp3d_dir, args.connectivity_dir, args.collision): s
             for s in ids
         }
-        with tqdm(total=len(ids), desc="scenes", unit="scene") as bar:
-            for future in as_completed(futures):
-                scene = futures[future]
-                try:
-                    row = future.result()
-                    tqdm.write(_summary(row))
-                except HavlnError as exc:
-                    failures += 1
-                    tqdm.write(f"{scene}: FAILED: {exc}")
-                bar.update()
+        try:
+            with tqdm(total=len(ids), desc="scenes", unit="scene") as bar:
+                for future in as_completed(futures):
+                    failures += _report(futures[future], future)
+                    bar.update()
+        except KeyboardInterrupt:
+            pool.shutdown(wait=True, cancel_futures=True)  # scenes not started stay unbuilt
+            raise
     print(f"built {len(ids) - failures} of {len(ids)} scenes")
     return 1 if failures else 0
 
@@ -81,6 +106,10 @@ def scenes_build(args: argparse.Namespace) -> int:
 def dataset_build(args: argparse.Namespace) -> int:
     """Generates a split with a progress bar; prints the files and instruction lengths."""
     from havln_mj.tasks.procedural import build_split
+
+    problem = argchecks.scene_ids("--scenes", args.scenes, known_scene_ids())
+    if problem:
+        raise InvalidArgumentError(problem)
 
     built = build_split(args.scenes, args.split, args.episodes_per_scene, args.seed, args.out)
     words = built.word_counts()
@@ -90,6 +119,22 @@ def dataset_build(args: argparse.Namespace) -> int:
         f"min {min(words)}, max {max(words)}"
     )
     return 0
+
+
+def _build_problems(args: argparse.Namespace) -> list[str | None]:
+    return [
+        argchecks.in_range("--workers", args.workers, 1),
+        argchecks.existing("--mp3d-dir", args.mp3d_dir),
+        argchecks.existing("--connectivity-dir", args.connectivity_dir),
+    ]
+
+
+def _dataset_problems(args: argparse.Namespace) -> list[str | None]:
+    return [
+        argchecks.in_range("--episodes-per-scene", args.episodes_per_scene, 1),
+        argchecks.in_range("--seed", args.seed, 0),
+        argchecks.writable_folder("--out", args.out),
+    ]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -111,7 +156,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--connectivity-dir", type=Path, default=None, help="folder of connectivity graphs"
     )
     build.add_argument("--collision", choices=COLLISION_MODES, default="auto")
-    build.add_argument("--workers", type=int, default=2, help="parallel processes (default 2)")
+    build.add_argument(
+        "--workers",
+        type=int,
+        default=2,
+        help="parallel processes (default 2; at most one per scene and per CPU)",
+    )
     dataset = sub.add_parser("dataset", help="episode datasets").add_subparsers(
         dest="command", required=True
     )
@@ -142,16 +192,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         except HavlnError as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 2
-    if args.group == "dataset":
-        if args.episodes_per_scene < 1:
-            parser.error(f"--episodes-per-scene must be at least 1, got {args.episodes_per_scene}")
-    elif args.workers < 1:
-        parser.error(f"--workers must be at least 1, got {args.workers}")
+    problems = _dataset_problems(args) if args.group == "dataset" else _build_problems(args)
+    for problem in problems:
+        if problem:
+            parser.error(problem)
     try:
         return dataset_build(args) if args.group == "dataset" else scenes_build(args)
     except HavlnError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("interrupted: finished scenes are kept, unfinished ones left out", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -10,13 +10,21 @@ here depends on the working directory.
 
 from __future__ import annotations
 
+import atexit
+import functools
+import logging
 import os
+import shutil
+import tempfile
 from importlib import resources
 from pathlib import Path
 
 from havln_mj.errors import InvalidArgumentError, MissingDataError
 
+log = logging.getLogger(__name__)
+
 _ASSET_DIRS = ("assets", "scenes", "humans", "robots", "agents", "eval")
+CACHE_ENV = "HAVLN_CACHE"
 
 
 def project_home() -> Path:
@@ -61,9 +69,44 @@ def asset_path(kind: str, *parts: str) -> Path:
     return path
 
 
+def cache_root() -> Path:
+    """The cache folder: ``$HAVLN_CACHE`` (default ``~/.cache/havln_mj``) when it can be written.
+
+    When it cannot be (read-only, or the path is a file), a warning names it and the fix,
+    once per process, and a temporary folder removed at exit is used instead: work goes on,
+    but nothing built is kept for the next run.
+    """
+    return _usable_cache(os.environ.get(CACHE_ENV, "~/.cache/havln_mj"))
+
+
 def cache_dir(*parts: str) -> Path:
-    """Returns (and creates) a folder under ``$HAVLN_CACHE`` (default ``~/.cache/havln_mj``)."""
-    root = Path(os.environ.get("HAVLN_CACHE", "~/.cache/havln_mj")).expanduser()
-    path = root.joinpath(*parts)
+    """Returns (and creates) a folder under :func:`cache_root`."""
+    path = cache_root().joinpath(*parts)
     path.mkdir(parents=True, exist_ok=True)
     return path
+
+
+@functools.cache
+def _usable_cache(setting: str) -> Path:
+    """``setting`` as a folder that can be written, else a temporary one (checked once)."""
+    root = Path(setting).expanduser()
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(dir=root, prefix=".write-test-")
+        os.close(fd)
+        os.unlink(probe)
+        return root
+    except OSError as exc:
+        fallback = Path(tempfile.mkdtemp(prefix="havln_mj-cache-"))
+        atexit.register(shutil.rmtree, fallback, True)
+        log.warning(
+            "cache folder %s cannot be written (%s); using the temporary folder %s, removed at "
+            "exit, so nothing built is kept between runs. To fix: make %s a writable folder, or "
+            "set %s to one.",
+            root,
+            exc.strerror or exc,
+            fallback,
+            root,
+            CACHE_ENV,
+        )
+        return fallback

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from havln_mj.cache import pid_alive
 from havln_mj.errors import OutputError
 from havln_mj.frames import heading_to, wrap_angle
 from havln_mj.render.video import VideoWriter
@@ -77,7 +78,7 @@ def staged_outputs(out: Path) -> Iterator[_Stage]:
         out.mkdir(parents=True, exist_ok=True)
         for old in out.glob(f"{_STAGING}*"):
             pid = old.name.removeprefix(_STAGING)
-            if not pid.isdigit() or not _alive(int(pid)):
+            if not pid.isdigit() or not pid_alive(int(pid)):
                 shutil.rmtree(old, ignore_errors=True)
         stage = _Stage(out)
         stage.path.mkdir()
@@ -87,18 +88,6 @@ def staged_outputs(out: Path) -> Iterator[_Stage]:
         yield stage
     finally:
         shutil.rmtree(stage.path, ignore_errors=True)
-
-
-def _alive(pid: int) -> bool:
-    if pid == os.getpid():
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
 
 
 class _Video:

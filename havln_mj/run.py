@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from havln_mj import __version__
+from havln_mj import __version__, argchecks
 from havln_mj.errors import HavlnError, InvalidArgumentError
 from havln_mj.frames import heading_to
 from havln_mj.recording import OUTPUTS, Recording, staged_outputs
@@ -248,6 +248,16 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
             f"--go1-camera-height must be in [0.1, 3] m, got {args.go1_camera_height}",
         ),
     ]
+    checks += [
+        (message is None, message)
+        for message in (
+            argchecks.existing("--human-placements", args.human_placements, "file"),
+            argchecks.existing("--haps-dir", args.haps_dir),
+            argchecks.existing("--smpl-model", args.smpl_model, "file"),
+            argchecks.existing("--mp3d-dir", args.mp3d_dir),
+            argchecks.existing("--connectivity-dir", args.connectivity_dir),
+        )
+    ]
     for ok, message in checks:
         if not ok:
             p.error(message)
@@ -262,6 +272,7 @@ def run(args: argparse.Namespace) -> dict:
     out = (args.out or Path.cwd() / "havln_runs" / scene.replace("/", "_")).expanduser().resolve()
     with staged_outputs(out) as stage:
         sim = make_simulator(args, "point")
+        source = sim.people_source(scene)  # fails before a graph proxy is built for nobody
         scan, crowd = sim.scan(scene), sim.crowd(scene)
         print(f"havln_mj {__version__}: {scan.description}", flush=True)
         print(
@@ -290,6 +301,7 @@ def run(args: argparse.Namespace) -> dict:
             "seed": args.seed,
             "resolution": [args.width, args.height],
             "vfov_deg": args.vfov,
+            "people_source": source,
             "people": [
                 {
                     "activity": p.activity,

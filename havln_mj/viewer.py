@@ -19,6 +19,7 @@ It needs a display (GLFW); under a headless machine use Xvfb (``xvfb-run havln_m
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import threading
 import time
@@ -27,6 +28,7 @@ from collections.abc import Callable, Sequence
 import mujoco
 import numpy as np
 
+from havln_mj import argchecks
 from havln_mj.errors import HavlnError, InvalidArgumentError
 from havln_mj.frames import heading_to
 from havln_mj.render.camera import FAR_M, NEAR_M
@@ -146,6 +148,10 @@ def run_viewer(
     """
     from havln_mj.sim.simulator import Simulator
 
+    if frames is not None and (
+        isinstance(frames, bool) or not isinstance(frames, int) or frames < 1
+    ):
+        raise InvalidArgumentError(f"frames must be None or an int ≥ 1, got {frames!r}")
     sim = Simulator(humans=humans, body=body)
     sim.setRenderingEnabled(False)
     sim.setRestrictedNavigation(False)
@@ -202,15 +208,32 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
-def main(args: argparse.Namespace) -> int:
-    """Runs the viewer from parsed arguments; returns the exit code."""
+def _problems(args: argparse.Namespace) -> list[str | None]:
     keys = [k.strip() for k in args.keys.split(",") if k.strip()]
     unknown = [k for k in keys if k not in _GLFW]
+    headless = sys.platform.startswith("linux") and not (
+        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    )
+    return [
+        f"--keys {unknown!r} unknown; valid: {', '.join(_GLFW)}" if unknown else None,
+        argchecks.in_range("--seed", args.seed, 0),
+        None if args.frames is None else argchecks.in_range("--frames", args.frames, 1),
+        argchecks.scene_ids("--scene", [args.scene]),
+        "the viewer needs a display: $DISPLAY is not set (on a headless machine run it under "
+        "a virtual one: xvfb-run havln_mj view ...)"
+        if headless
+        else None,
+    ]
+
+
+def main(args: argparse.Namespace) -> int:
+    """Runs the viewer from parsed arguments; returns the exit code."""
+    problems = [p for p in _problems(args) if p]
+    if problems:
+        print(f"error: {problems[0]}", file=sys.stderr)
+        return 2
+    keys = [k.strip() for k in args.keys.split(",") if k.strip()]
     try:
-        if unknown:
-            raise InvalidArgumentError(f"--keys {unknown!r} unknown; valid: {', '.join(_GLFW)}")
-        if args.seed < 0 or (args.frames is not None and args.frames < 1):
-            raise InvalidArgumentError("--seed must be ≥ 0 and --frames ≥ 1")
         shown = run_viewer(
             args.scene,
             body=args.body,

@@ -56,6 +56,7 @@ def scene(request, tmp_path_factory, shared_data_or_none):
     return {
         "dataset": data / "r2r" / "R2R_val_seen.json",
         "connectivity_dir": data / "mp3d_connectivity",
+        "human_placements": data / "ha3d" / "human_placements.json",
         "scenes": ["17DRP5sb8fy"],
     }
 

@@ -5,6 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from havln_mj import argchecks
+from havln_mj.render.camera import MAX_SIZE
+
 HELP = "place people in a scan on a local web page; save them as HA3D placements"
 
 
@@ -40,10 +43,22 @@ def annotate(args: argparse.Namespace) -> int:
     from havln_mj.errors import InvalidArgumentError
     from havln_mj.scene.scan import load_scan
 
-    if not 0 <= args.port <= 65535:
-        raise InvalidArgumentError(f"--port must be in [0, 65535], got {args.port}")
-    scan = load_scan(args.scene, mp3d_dir=args.mp3d_dir, connectivity_dir=args.connectivity_dir)
     path = (args.placements or Path.cwd() / "human_placements.json").expanduser().resolve()
+    problems = [
+        argchecks.in_range("--port", args.port, 0, 65535),
+        argchecks.in_range("--width", args.width, 1, MAX_SIZE, " pixels"),
+        argchecks.in_range("--height", args.height, 1, MAX_SIZE, " pixels"),
+        None if 0 < args.vfov < 180 else f"--vfov must be in (0, 180) degrees, got {args.vfov:g}",
+        argchecks.scene_ids("--scene", [args.scene]),
+        argchecks.existing("--mp3d-dir", args.mp3d_dir),
+        argchecks.existing("--connectivity-dir", args.connectivity_dir),
+        None if not path.is_dir() else f"--placements {path} is a folder; give a JSON file",
+        argchecks.writable_folder("the folder of --placements", path.parent),
+    ]
+    problems = [p for p in problems if p]
+    if problems:
+        raise InvalidArgumentError(problems[0])
+    scan = load_scan(args.scene, mp3d_dir=args.mp3d_dir, connectivity_dir=args.connectivity_dir)
     session = AnnotationSession(scan, path, (args.width, args.height), args.vfov)
     server = AnnotationServer(session, port=args.port, verbose=args.verbose)
     print(

@@ -22,15 +22,12 @@ import sys
 import time
 from collections.abc import Sequence
 
-import numpy as np
-
 from havln_mj.distributed._ray import ensure_ray
 from havln_mj.errors import InvalidArgumentError
-from havln_mj.eval.run import _simulator, make_agent, run_cli
-from havln_mj.eval.run import parse_args as eval_parse_args
+from havln_mj.eval.cli import parse_args as eval_parse_args
+from havln_mj.eval.run import run_cli, run_instruction, score_split
+from havln_mj.eval.setup import evaluation_simulator, make_agent, people_report, protocol_of
 from havln_mj.tasks.episodes import Episode
-from havln_mj.tasks.experts import run_expert
-from havln_mj.tasks.metrics import EvalEpisode, Evaluator, MetricConfig
 
 
 class ShardRunner:
@@ -38,28 +35,16 @@ class ShardRunner:
 
     def __init__(self, args: argparse.Namespace) -> None:
         self._args = args
-        self._sim = _simulator(args)
+        self._sim = evaluation_simulator(args)
         self._make = make_agent(args.agent, args)
+        self._protocol = protocol_of(args)
 
     def run(self, items: list[tuple[int, Episode, int]]) -> list[dict]:
-        """Runs ``(index, episode, k)`` items; one EvalEpisode-ready record per item."""
-        out = []
-        for index, episode, k in items:
-            rng = np.random.default_rng([self._args.seed, index])
-            trajectory = run_expert(self._sim, episode, self._make(rng), instruction=k)
-            out.append(
-                {
-                    "index": index,
-                    "instr_id": f"{episode.path_id}_{k}",
-                    "r2r": trajectory.r2r(),
-                    "steps": [
-                        [r.viewpoint, r.heading, r.elevation, r.is_crushed]
-                        for r in trajectory.records
-                    ],
-                    "stopped": trajectory.stopped,
-                }
-            )
-        return out
+        """Runs ``(index, episode, k)`` items; one ``instructions.jsonl`` record per item."""
+        return [
+            run_instruction(self._sim, episode, k, index, self._make, self._args, self._protocol)
+            for index, episode, k in items
+        ]
 
     def close(self) -> None:
         """Closes the simulator."""
@@ -95,6 +80,13 @@ def evaluate_split_ray(
     """
     if workers < 1:
         raise InvalidArgumentError(f"workers must be >= 1, got {workers}")
+    if workers > 1 and protocol_of(args).name == "ha3d":
+        # HA3D's people run on one frame counter shared by every episode in order: shards on
+        # separate actors would each start it afresh and score different people.
+        raise InvalidArgumentError(
+            "--protocol ha3d needs --workers 1 (HA3D's human clock is shared by all episodes "
+            "in order); use the strict protocol to shard"
+        )
     make_agent(args.agent)  # fail in the driver on a bad agent
     ray = ensure_ray(address)
     items = [
@@ -120,31 +112,16 @@ def evaluate_split_ray(
                 ray.kill(a)
     records.sort(key=lambda r: r["index"])
     seconds = time.perf_counter() - t0
-
-    runs, submission, scored = [], [], []
-    for (_, episode, _), rec in zip(items, records, strict=True):
-        instr_id = rec["instr_id"]
-        submission.append({"instr_id": instr_id, "trajectory": rec["r2r"]})
-        scored.append(EvalEpisode.from_ha_r2r(episode, rec["steps"], episode_id=instr_id))
-        runs.append({"instr_id": instr_id, "scan": episode.scan, "stopped": rec["stopped"]})
-    sim = _simulator(args)  # the driver's graphs for scoring
+    sim = evaluation_simulator(args)  # the driver's graphs and people for scoring
     try:
-        result = Evaluator(config=MetricConfig(critical=args.critical)).evaluate(scored, sim.graph)
+        report = score_split(args, episodes, split, records, sim, people_report(sim, episodes))
     finally:
         sim.close()
-    for run, metrics in zip(runs, result.per_episode, strict=True):
-        run.update(metrics)
-    summary = dict(result.summary)
-    summary.update(
-        split=split,
-        agent=args.agent,
-        body=args.body,
-        critical=args.critical,
-        instructions=len(runs),
-        seconds=round(seconds, 2),
-        instructions_per_s=round(len(runs) / seconds, 1) if seconds > 0 else None,
+    n = len(records)
+    report["summary"].update(
+        seconds=round(seconds, 2), instructions_per_s=round(n / seconds, 1) if seconds > 0 else None
     )
-    return {"summary": summary, "episodes": runs, "submission": submission}
+    return report
 
 
 def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:

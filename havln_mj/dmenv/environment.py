@@ -9,6 +9,7 @@ core), turned into ``dm_env`` terms:
 * STOP, a fall or diverged physics end the episode with a ``LAST`` step and discount 0; the
   step limit (:data:`MAX_STEPS`, per action set) ends it with discount 1 (truncation).
 * The latest step's ``info`` dictionary is the environment's ``info`` attribute.
+* ``protocol="ha3d"`` scores collisions as HA3D's code did (:mod:`havln_mj.tasks.protocol`).
 """
 
 from __future__ import annotations

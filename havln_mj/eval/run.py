@@ -4,146 +4,193 @@ Episodes come from an R2R / HA-R2R file or split name (``--dataset``), or are ge
 procedural houses (``--scenes proc-0 proc-1 ...``: R2R-like shortest paths of 4–7 viewpoints
 and 5–20 m with three instructions each, people as the simulator places them for ``--seed``).
 Every instruction is run through ``havln_mj.Simulator`` (point body or GO1, rendering off,
-people placed by HA3D's rule or HA3D's placement file) with the chosen agent:
+people from HA3D's placement file or placed by HA3D's rule) with the chosen agent:
 
 * ``shortest``: the optimal expert (shortest path, people ignored);
 * ``oracle``: HA3D's sub-optimal human-aware expert (re-plans around people within 4.5 m);
 * ``oracle-global``: the paper's variant that plans once around every person;
-* ``random``: a seeded random walk of at most 30 steps;
+* ``random``: a seeded random walk of at most 30 steps (instruction ``i`` draws from
+  ``default_rng([seed, i])``);
 * ``module:callable``: your agent, a callable ``(rng) -> Expert`` (see
   :class:`havln_mj.tasks.experts.Expert`);
 * a checkpoint file (``.pt``) of a trained VLN-CM or VLN-DT (:mod:`havln_mj.agents.train`);
   the features of scans it has not seen are rendered first, with the evaluation's people.
 
-Writes to ``--out``: ``episodes.json`` (per-instruction metrics), ``submission.json``
-(trajectories in the R2R submission format), ``summary.json`` and ``summary.md`` (NE, TCR,
-CR, SR per split, the paper's layout, plus the other metrics).
+``--protocol`` chooses the rules (:mod:`havln_mj.tasks.protocol`): ``strict`` (ours: the
+collision signal along every action, horizontally; people on each episode's own clock) or
+``ha3d`` (HA3D's code: per state, 3-D from the camera, one shared frame counter, the expert
+stopping when blocked and capped at 20 steps, HA3D's TCR and CR), to compare with the
+HA-VLN paper. ``--critical`` and ``--count`` change the metrics' rules alone.
+
+A real scan needs people to be evaluated with: HA3D's placement file lists the 90 Matterport3D
+scans; a scan it does not list needs its ``.house`` file (region labels for HA3D's rule), or
+the evaluation stops with an error naming ``--human-placements`` (``--no-people`` evaluates
+an empty building on purpose). An HA-R2R episode naming a person the simulator does not
+place is an error too: the placements are not the ones the dataset was made with.
+
+Writes to ``--out`` (see :mod:`havln_mj.eval.outputs`): ``run.json`` first,
+``instructions.jsonl`` as instructions finish (``--resume`` continues an interrupted
+evaluation), then ``episodes.json`` (per-instruction metrics), ``submission.json``
+(trajectories in the R2R submission format), ``summary.md`` and ``summary.json`` (NE, TCR,
+CR, SR per split in the paper's layout, the other metrics, the protocol and where the people
+came from). ``--record N`` films the first N instructions (``recordings/``: a video and a
+top-down map each, see :mod:`havln_mj.eval.record`).
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
 import json
 import sys
 import time
 from collections.abc import Callable, Sequence
-from pathlib import Path
+from dataclasses import asdict
 
 import numpy as np
 from tqdm import tqdm
 
-from havln_mj.cache import atomic_write_bytes, atomic_write_json
-from havln_mj.errors import HavlnError, InvalidArgumentError
-from havln_mj.scene.ids import expand_scene_ranges
-from havln_mj.sim.simulator import Simulator
-from havln_mj.tasks.datasets import load_dataset
-from havln_mj.tasks.episodes import Episode
-from havln_mj.tasks.experts import (
-    Expert,
-    HumanAwareExpert,
-    RandomWalkExpert,
-    ShortestPathExpert,
-    run_expert,
+from havln_mj.errors import HavlnError
+from havln_mj.eval.cli import load_splits, parse_args, settings
+from havln_mj.eval.outputs import RECORDINGS, Outputs
+from havln_mj.eval.setup import (
+    EXPERTS,
+    AgentFactory,
+    banner,
+    blank_instructions,
+    evaluation_simulator,
+    make_agent,
+    people_report,
+    protocol_of,
 )
-from havln_mj.tasks.metrics import EvalEpisode, Evaluator, MetricConfig
-from havln_mj.tasks.procedural import procedural_episodes
+from havln_mj.sim.simulator import Simulator
+from havln_mj.tasks.episodes import Episode
+from havln_mj.tasks.experts import run_expert
+from havln_mj.tasks.metrics import EvalEpisode, Evaluator
+from havln_mj.tasks.protocol import TaskProtocol
 
-AGENTS = ("shortest", "oracle", "oracle-global", "random")
+__all__ = ["evaluate_split", "main", "make_agent", "parse_args", "run_cli", "score_split"]
+
+
 TABLE = (("NE", "ne"), ("TCR", "tcr"), ("CR", "cr"), ("SR", "sr"))
 
 
-def make_agent(
-    name: str, args: argparse.Namespace | None = None
-) -> Callable[[np.random.Generator], Expert]:
-    """The factory of an agent given by name, ``module:callable`` or checkpoint file.
+def run_instruction(
+    sim: Simulator,
+    episode: Episode,
+    k: int,
+    index: int,
+    make: AgentFactory,
+    args: argparse.Namespace,
+    protocol: TaskProtocol,
+) -> dict:
+    """Runs instruction ``k`` of ``episode``; the record ``instructions.jsonl`` keeps."""
+    frame0, t0 = sim.human_clock_frame, time.perf_counter()
+    cap = protocol.expert_max_steps if args.agent in EXPERTS else None
+    trajectory = run_expert(
+        sim,
+        episode,
+        make(np.random.default_rng([args.seed, index])),
+        instruction=k,
+        max_steps=cap,
+        protocol=protocol,
+    )
+    return {
+        "instr_id": f"{episode.path_id}_{k}",
+        "index": index,
+        "scan": episode.scan,
+        "stopped": trajectory.stopped,
+        "steps": [[r.viewpoint, r.heading, r.elevation, r.is_crushed] for r in trajectory.records],
+        "r2r": trajectory.r2r(),
+        "frames": [frame0, sim.human_clock_frame],
+        "seconds": round(time.perf_counter() - t0, 6),
+    }
+
+
+def evaluate_split(
+    args: argparse.Namespace,
+    episodes: list[Episode],
+    split: str,
+    outputs: Outputs | None = None,
+) -> dict:
+    """Runs the agent over every instruction of ``episodes``; returns the split's report.
 
     Args:
-        name: The agent.
-        args: The evaluation's arguments (a checkpoint agent renders features with its
-            seed, connectivity folder and placements).
-
-    Raises:
-        InvalidArgumentError: Unknown name, or a ``module:callable`` that cannot be imported.
-        MissingDataError: A checkpoint file that does not exist.
+        args: The evaluation's arguments.
+        episodes: The split's episodes.
+        split: The split's name in the report.
+        outputs: Where finished instructions are written as they come (and which are
+            already done, when resuming); None keeps everything in memory.
     """
-    if name.endswith(".pt"):
-        from havln_mj.agents.policy import load_agent  # torch: only for trained agents
-
-        return load_agent(
-            name,
-            seed=getattr(args, "seed", 0),
-            connectivity_dir=getattr(args, "connectivity_dir", None),
-            human_placements=getattr(args, "human_placements", None),
-        )
-    builtin = {
-        "shortest": lambda rng: ShortestPathExpert("graph"),
-        "oracle": lambda rng: HumanAwareExpert(mode="local"),
-        "oracle-global": lambda rng: HumanAwareExpert(mode="global"),
-        "random": lambda rng: RandomWalkExpert(rng),
-    }
-    if name in builtin:
-        return builtin[name]
-    module, _, attr = name.partition(":")
-    if not attr:
-        raise InvalidArgumentError(
-            f"unknown agent {name!r}; valid: {', '.join(AGENTS)}, 'module:callable' or a "
-            "checkpoint file (.pt)"
-        )
+    protocol = protocol_of(args)
+    sim = evaluation_simulator(args)
     try:
-        return getattr(importlib.import_module(module), attr)
-    except (ImportError, AttributeError) as exc:
-        raise InvalidArgumentError(f"cannot load agent {name!r}: {exc}") from None
+        people = people_report(sim, episodes)
+        print(banner(args, split, episodes, people), file=sys.stderr, flush=True)
+        make = make_agent(args.agent, args)
+        records = []
+        index, resume_frame = 0, None
+        for episode in tqdm(episodes, desc=split, unit="path"):
+            for k in range(len(episode.instructions)):
+                done = outputs.done.get((split, f"{episode.path_id}_{k}")) if outputs else None
+                if done is not None:
+                    resume_frame = done["frames"][1]
+                else:
+                    if resume_frame is not None:  # where HA3D's counter was when it stopped
+                        sim.set_rules(frame=resume_frame)
+                        resume_frame = None
+                    done = run_instruction(sim, episode, k, index, make, args, protocol)
+                    done["split"] = split
+                    if outputs is not None:
+                        outputs.add(done)
+                records.append(done)
+                index += 1
+        report = score_split(args, episodes, split, records, sim, people)
+    finally:
+        sim.close()
+    return report
 
 
-def _simulator(args: argparse.Namespace) -> Simulator:
-    sim = Simulator(
-        humans=not args.no_people, human_placements=args.human_placements, body=args.body
-    )
-    if args.connectivity_dir:
-        sim.setNavGraphPath(str(args.connectivity_dir))
-    sim.setRenderingEnabled(False)
-    sim.setDiscretizedViewingAngles(True)
-    sim.setSeed(args.seed)
-    sim.initialize()
-    return sim
-
-
-def evaluate_split(args: argparse.Namespace, episodes: list[Episode], split: str) -> dict:
-    """Runs the agent over every instruction of ``episodes``; returns the split's report."""
-    sim = _simulator(args)
-    make = make_agent(args.agent, args)
-    rng = np.random.default_rng(args.seed)
-    config = MetricConfig(critical=args.critical)
-    evaluator = Evaluator(config=config)
-    runs, submission, scored = [], [], []
-    t0 = time.perf_counter()
-    for episode in tqdm(episodes, desc=split, unit="path"):
-        for k in range(len(episode.instructions)):
-            trajectory = run_expert(sim, episode, make(rng), instruction=k)
-            instr_id = f"{episode.path_id}_{k}"
-            submission.append({"instr_id": instr_id, "trajectory": trajectory.r2r()})
-            steps = [
-                [r.viewpoint, r.heading, r.elevation, r.is_crushed] for r in trajectory.records
-            ]
-            scored.append(EvalEpisode.from_ha_r2r(episode, steps, episode_id=instr_id))
-            runs.append({"instr_id": instr_id, "scan": episode.scan, "stopped": trajectory.stopped})
-    seconds = time.perf_counter() - t0
-    result = evaluator.evaluate(scored, sim.graph)
-    for run, metrics in zip(runs, result.per_episode, strict=True):
-        run.update(metrics)
+def score_split(
+    args: argparse.Namespace,
+    episodes: Sequence[Episode],
+    split: str,
+    records: Sequence[dict],
+    sim: Simulator,
+    people: dict | None = None,
+) -> dict:
+    """Scores the split's instruction records (in episode order) with the protocol's metrics."""
+    protocol = protocol_of(args)
+    items = [(e, k) for e in episodes for k in range(len(e.instructions))]
+    scored = [
+        EvalEpisode.from_ha_r2r(e, r["steps"], episode_id=r["instr_id"])
+        for (e, _), r in zip(items, records, strict=True)
+    ]
+    result = Evaluator(config=protocol.metrics).evaluate(scored, sim.graph)
+    runs = []
+    for r, metrics in zip(records, result.per_episode, strict=True):
+        runs.append({"instr_id": r["instr_id"], "scan": r["scan"], "stopped": r["stopped"]})
+        runs[-1].update(metrics)
+    seconds = sum(r["seconds"] for r in records)
     summary = dict(result.summary)
     summary.update(
         split=split,
         agent=args.agent,
         body=args.body,
-        critical=args.critical,
+        protocol=protocol.name,
+        critical=protocol.metrics.critical,
+        metrics=asdict(protocol.metrics),
+        collision_rule=asdict(sim.collision_rule),
+        human_clock=asdict(sim.human_clock),
+        expert_max_steps=protocol.expert_max_steps if args.agent in EXPERTS else None,
+        people=people,
+        pinned_people=bool(getattr(args, "pinned_people", False)),
+        blank_instructions=blank_instructions(episodes),
         instructions=len(runs),
         seconds=round(seconds, 2),
         instructions_per_s=round(len(runs) / seconds, 1) if seconds > 0 else None,
     )
-    sim.close()
-    return {"summary": summary, "episodes": runs, "submission": submission}
+    submission = [{"instr_id": r["instr_id"], "trajectory": r["r2r"]} for r in records]
+    return {"summary": summary, "episodes": runs, "submission": submission, "records": records}
 
 
 def markdown_table(summaries: Sequence[dict]) -> str:
@@ -154,39 +201,9 @@ def markdown_table(summaries: Sequence[dict]) -> str:
     cells = []
     for s in summaries:
         cells += [f"{s[key]:.2f}" if s.get(key) is not None else "–" for _, key in TABLE]
-    return "\n".join([head, rule, f"| {summaries[0]['agent']} | " + " | ".join(cells) + " |"])
-
-
-def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
-    """Parses command-line arguments."""
-    p = argparse.ArgumentParser(prog="python -m havln_mj.eval", description=__doc__.splitlines()[0])
-    src = p.add_mutually_exclusive_group(required=True)
-    src.add_argument("--dataset", nargs="+", help="R2R/HA-R2R JSON files or split names")
-    src.add_argument(
-        "--scenes", nargs="+", help="procedural scene ids (proc-<seed>; proc-A:B for a range)"
-    )
-    p.add_argument("--split", default=None, help="name of the split in the tables")
-    p.add_argument("--per-scene", type=int, default=10, help="episodes per procedural scene")
-    p.add_argument(
-        "--skip", type=int, default=0, help="leave out each scene's first paths (val_seen)"
-    )
-    p.add_argument(
-        "--agent",
-        default="shortest",
-        help=f"{', '.join(AGENTS)}, module:callable or a trained agent's checkpoint (.pt)",
-    )
-    p.add_argument("--body", choices=("point", "go1"), default="point")
-    p.add_argument("--critical", choices=("paper", "ha3d", "none"), default="paper")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--no-people", action="store_true", help="evaluate without people")
-    p.add_argument("--connectivity-dir", type=Path, default=None)
-    p.add_argument("--human-placements", type=Path, default=None)
-    p.add_argument("--data-dir", type=Path, default=None, help="folder with r2r/ and ha_r2r/")
-    p.add_argument("--out", type=Path, default=Path("havln_eval"))
-    p.add_argument(
-        "--threads", type=int, default=None, help="torch threads of a trained agent (1: busy CPU)"
-    )
-    return p.parse_args(argv)
+    first = summaries[0]
+    name = f"{first['agent']} ({first.get('protocol', 'strict')})"
+    return "\n".join([head, rule, f"| {name} | " + " | ".join(cells) + " |"])
 
 
 SplitRunner = Callable[[argparse.Namespace, list[Episode], str], dict]
@@ -195,40 +212,61 @@ SplitRunner = Callable[[argparse.Namespace, list[Episode], str], dict]
 def run_cli(args: argparse.Namespace, evaluate: SplitRunner = evaluate_split) -> int:
     """Loads the splits ``args`` names, evaluates each with ``evaluate`` and writes the files.
 
-    ``evaluate`` is :func:`evaluate_split` here; the Ray command passes its sharded version.
+    ``evaluate`` is :func:`evaluate_split` here (which writes each instruction as it
+    finishes); the Ray command passes its sharded version, whose results are written when
+    the split is done.
 
     Returns:
-        The process exit code (2 on bad input, with the message on stderr).
+        0 when done; 2 on bad input or a failure (with the message on stderr); 130 when
+        interrupted (finished instructions are kept for ``--resume``).
     """
-    if args.agent.endswith(".pt") and args.threads:
-        import torch  # a trained agent: torch is installed
-
-        torch.set_num_threads(args.threads)
+    out = args.out.expanduser().resolve()
+    outputs = None
     try:
         make_agent(args.agent, args)  # fail at once on a bad agent
-        splits: list[tuple[str, list[Episode]]] = []
-        if args.scenes:
-            scenes = expand_scene_ranges(args.scenes)
-            episodes = procedural_episodes(scenes, args.per_scene, args.seed, args.skip)
-            splits.append((args.split or "procedural", episodes))
-        else:
-            for name in args.dataset:
-                data = load_dataset(
-                    name, connectivity_dir=args.connectivity_dir, data_dir=args.data_dir
-                )
-                splits.append((args.split or Path(str(name)).stem, list(data.episodes)))
-        out = args.out.expanduser().resolve()
-        out.mkdir(parents=True, exist_ok=True)
-        reports = [evaluate(args, episodes, split) for split, episodes in splits]
+        outputs = Outputs(out, settings(args), args.resume)
+        if args.agent.endswith(".pt") and args.threads:
+            import torch  # a trained agent: torch is installed
+
+            torch.set_num_threads(args.threads)
+        splits = load_splits(args)
+        outputs.begin()
+        reports = []
+        for split, episodes in splits:
+            if evaluate is evaluate_split:
+                reports.append(evaluate_split(args, episodes, split, outputs))
+            else:
+                reports.append(evaluate(args, episodes, split))
+                for record in reports[-1].get("records", ()):
+                    outputs.add({**record, "split": split})
+        summaries = [r["summary"] for r in reports]
+        table = markdown_table(summaries)
+        outputs.finish(
+            [e for r in reports for e in r["episodes"]],
+            [s for r in reports for s in r["submission"]],
+            summaries,
+            table,
+        )
+        if args.record:
+            from havln_mj.eval.record import record_episodes  # rendering: only when asked
+
+            for (_, episodes), report in zip(splits, reports, strict=True):
+                record_episodes(args, episodes, report["records"][: args.record], out / RECORDINGS)
     except HavlnError as exc:
         print(f"error: {exc}", file=sys.stderr)
+        if outputs is not None and outputs.done:
+            print(f"finished instructions are kept in {out}: rerun with --resume", file=sys.stderr)
         return 2
-    summaries = [r["summary"] for r in reports]
-    atomic_write_json(out / "episodes.json", [e for r in reports for e in r["episodes"]])
-    atomic_write_json(out / "submission.json", [s for r in reports for s in r["submission"]])
-    atomic_write_json(out / "summary.json", summaries, indent=1)
-    table = markdown_table(summaries)
-    atomic_write_bytes(out / "summary.md", (table + "\n").encode())
+    except KeyboardInterrupt:
+        kept = len(outputs.done) if outputs is not None else 0
+        print(
+            f"interrupted: {kept} finished instructions kept in {out}; rerun with --resume",
+            file=sys.stderr,
+        )
+        return 130
+    finally:
+        if outputs is not None:
+            outputs.close()
     print(table)
     print(json.dumps(summaries, indent=1))
     return 0

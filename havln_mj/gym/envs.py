@@ -5,6 +5,8 @@ uniformly over the episodes' instructions with the environment's generator (so
 ``reset(seed=s)`` always starts the same episode) and places the agent at the path's start,
 heading, elevation 0. The people are the simulator's for ``episode_seed``, the seed the
 procedural episodes were generated with, so the dataset's human annotations hold.
+``protocol="ha3d"`` scores collisions as HA3D's code did (see :mod:`havln_mj.tasks.protocol`);
+the default, ``"strict"``, along every action.
 Observations, actions, rewards and ``info`` are described in
 :mod:`havln_mj.tasks.observations` and :mod:`havln_mj.tasks.episode_env`; the weighted
 reward terms are ``info["reward_terms"]`` and sum to the reward. ``terminated`` is True on

@@ -32,6 +32,15 @@ FIELDS = ("image_id", "pose", "included", "visible", "unobstructed", "height")
 # digits, so this loses nothing they carry while hiding float noise below 1e-6).
 DEFAULT_DECIMALS = 6
 _SUFFIX = "_connectivity.json"
+# Geometry a file must have: metres in a building's frame (the 90 MatterSim graphs lie within
+# ±75 m, camera heights 0.04–8.1 m), rigid poses (their rotations are orthonormal to 6e-6).
+MAX_COORDINATE_M = 10_000.0
+MAX_HEIGHT_M = 100.0
+_ROTATION_TOL = 1e-3
+# What a scene can be built from: the 90 graphs span at most 81 m across and 14 m up.
+MAX_EXTENT_M = 300.0
+MAX_RISE_M = 100.0
+MIN_EXTENT_M = 0.01
 
 
 @dataclass(frozen=True, eq=False)
@@ -211,15 +220,86 @@ def parse_connectivity(data: Any, source: str = "<memory>") -> Connectivity:
             raise MalformedDataError(f"{where}: height must be a finite number, got {height!r}")
         heights.append(height)
 
+    pose_array = np.array(poses, dtype=np.float64).reshape(n, 4, 4)
+    height_array = np.array(heights, dtype=np.float64)
+    _check_geometry(pose_array, height_array, ids, source)
     return Connectivity(
         ids=tuple(ids),
-        poses=np.array(poses, dtype=np.float64).reshape(n, 4, 4),
+        poses=pose_array,
         included=np.array(included, dtype=bool),
         visible=_bool_matrix(visible, "visible", ids, source),
         unobstructed=_bool_matrix(unobstructed, "unobstructed", ids, source),
-        heights=np.array(heights, dtype=np.float64),
+        heights=height_array,
         source=source,
     )
+
+
+def _check_geometry(poses: np.ndarray, heights: np.ndarray, ids: list[str], source: str) -> None:
+    """Raises for the first viewpoint whose pose is not rigid, lies too far, or has no height."""
+    if not len(ids):
+        return
+    rot = poses[:, :3, :3]
+    rigid = (
+        np.all(np.abs(rot @ rot.transpose(0, 2, 1) - np.eye(3)) <= _ROTATION_TOL, axis=(1, 2))
+        & (np.abs(np.linalg.det(rot) - 1.0) <= _ROTATION_TOL)
+        & np.all(poses[:, 3] == (0.0, 0.0, 0.0, 1.0), axis=1)
+    )
+    near = np.all(np.abs(poses[:, :3, 3]) <= MAX_COORDINATE_M, axis=1)
+    tall = (heights > 0.0) & (heights <= MAX_HEIGHT_M)
+    bad = np.flatnonzero(~(rigid & near & tall))
+    if not len(bad):
+        return
+    i = int(bad[0])
+    where = f"{source}: entry {i} (image_id {ids[i]!r})"
+    if not rigid[i]:
+        raise MalformedDataError(
+            f"{where}: pose must be a rigid camera-to-world transform (an orthonormal "
+            f"rotation with determinant 1 and a last row 0 0 0 1), got "
+            f"{poses[i].ravel().tolist()}"
+        )
+    if not near[i]:
+        raise MalformedDataError(
+            f"{where}: position {poses[i, :3, 3].tolist()} m lies outside "
+            f"±{MAX_COORDINATE_M:g} m; positions are metres in the building's frame"
+        )
+    raise MalformedDataError(
+        f"{where}: height must be a camera height above the floor in (0, {MAX_HEIGHT_M:g}] "
+        f"m, got {float(heights[i])!r}"
+    )
+
+
+def check_buildable(c: Connectivity) -> None:
+    """Checks that a scene can be built around a graph: a building's worth of viewpoints.
+
+    Raises:
+        MalformedDataError: Fewer than two included viewpoints, no edge between them, all of
+            them at one point, or spread wider or higher than a building (the message gives
+            the numbers and the limits).
+    """
+    inc = np.flatnonzero(c.included)
+    where = f"{c.source}: cannot build a scene from this graph"
+    if len(inc) < 2:
+        raise MalformedDataError(
+            f"{where}: it has {len(inc)} included viewpoint(s) of {len(c)}; at least 2 are needed"
+        )
+    flags = c.unobstructed[np.ix_(inc, inc)].copy()
+    np.fill_diagonal(flags, False)
+    if not flags.any():
+        raise MalformedDataError(
+            f"{where}: no edge joins its {len(inc)} included viewpoints (every 'unobstructed' "
+            "flag between them is false)"
+        )
+    pos = c.positions[inc]
+    span = np.ptp(pos, axis=0)
+    if float(np.max(span)) < MIN_EXTENT_M:
+        raise MalformedDataError(
+            f"{where}: all {len(inc)} included viewpoints stand at one point {pos[0].tolist()}"
+        )
+    if float(np.max(span[:2])) > MAX_EXTENT_M or float(span[2]) > MAX_RISE_M:
+        raise MalformedDataError(
+            f"{where}: its viewpoints span {span[0]:.1f} × {span[1]:.1f} m and {span[2]:.1f} m "
+            f"up; a building spans at most {MAX_EXTENT_M:g} m across and {MAX_RISE_M:g} m up"
+        )
 
 
 def dumps_connectivity(c: Connectivity, decimals: int = DEFAULT_DECIMALS) -> str:

@@ -22,7 +22,6 @@ takes the file's +y (up) to +z.
 
 from __future__ import annotations
 
-import struct
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -171,33 +170,6 @@ def _image_array(image: Any, path: Path, max_size: int | None) -> np.ndarray:
         raise CorruptMeshError(f"{path}: texture image has shape {array.shape}, expected H×W×3")
     array.flags.writeable = False
     return array
-
-
-def check_glb(path: Path) -> None:
-    """Checks that ``path`` holds a whole binary glTF without parsing it (no trimesh).
-
-    The header's magic and version, its total length against the file's size, and each
-    chunk's length against what follows: a truncated or overwritten file fails.
-
-    Raises:
-        MissingDataError: The file does not exist.
-        CorruptMeshError: The file is not a whole binary glTF 2.0.
-    """
-    try:
-        data = Path(path).read_bytes()
-    except FileNotFoundError:
-        raise MissingDataError(f"mesh file not found: {path}") from None
-    magic, version, length = struct.unpack_from("<4sII", data) if len(data) >= 12 else (b"", 0, 0)
-    ok = magic == b"glTF" and version == 2 and length == len(data)
-    at = 12
-    while ok and at < length:
-        ok = at + 8 <= length
-        if ok:
-            (size,) = struct.unpack_from("<I", data, at)
-            at += 8 + size
-            ok = at <= length
-    if not ok or at == 12:
-        raise CorruptMeshError(f"{path}: not a whole binary glTF 2.0 file")
 
 
 def load_mesh_parts(

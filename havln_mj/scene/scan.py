@@ -1,10 +1,16 @@
-"""Loading scans: one loader for every scan folder, and the cache of built procedural houses."""
+"""Loading scans: one loader for every scan folder, and the cache of built scans.
+
+A built scan (procedural house, converted Matterport scan, graph proxy) is used from the cache
+only when it is whole and was built from the inputs the scene would be built from now
+(:mod:`havln_mj.scene.cache_keys`); otherwise it is rebuilt, with a warning when it was damaged.
+"""
 
 from __future__ import annotations
 
 import json
 import logging
 import shutil
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
@@ -14,6 +20,8 @@ from havln_mj.cache import atomic_replace_dir, staging_dir
 from havln_mj.errors import MalformedDataError, MissingDataError
 from havln_mj.paths import cache_dir
 from havln_mj.scene.boxes import BoxSet
+from havln_mj.scene.cache_keys import read_manifest, write_manifest
+from havln_mj.scene.graph_regions import levels_from_graph
 from havln_mj.scene.ids import parse_scene_id
 from havln_mj.scene.navgraph import NavGraph, level_groups
 from havln_mj.scene.proxy.routes import Route, read_routes
@@ -21,6 +29,7 @@ from havln_mj.scene.regions import Regions
 from havln_mj.scene.scanfolder import (
     BOXES,
     CONNECTIVITY,
+    MANIFEST,
     MESH_GLB,
     MESH_OBJ,
     META,
@@ -46,7 +55,8 @@ class Scan:
         folder: The scan folder.
         mesh_path: The visual mesh (``mesh.glb`` or ``mesh.obj``).
         graph: The navigation graph.
-        regions: Levels, regions, objects and viewpoint regions (None if the folder has none).
+        regions: Levels, regions, objects and viewpoint regions (one unlabelled region per
+            storey when the folder has no regions file).
         boxes: Exact box geometry when the folder has ``boxes.json``, else None (the world
             builder then decomposes the mesh with CoACD).
         meta: The folder's ``scan.json`` content.
@@ -143,7 +153,16 @@ def read_scan_folder(folder: Path, scene_id: str | None = None) -> Scan:
             f"scan folder {folder} has no mesh: looked for {', '.join(map(str, candidates))}"
         )
     graph = NavGraph.from_file(folder / CONNECTIVITY)
-    regions = Regions.read(folder / REGIONS) if (folder / REGIONS).is_file() else None
+    if (folder / REGIONS).is_file():
+        regions = Regions.read(folder / REGIONS)
+    else:
+        log.warning(
+            "scan folder %s has no %s: using one unlabelled region per storey, so people are "
+            "placed only from a placement file",
+            folder,
+            REGIONS,
+        )
+        regions = levels_from_graph(graph)
     boxes = BoxSet.read(folder / BOXES) if (folder / BOXES).is_file() else None
     routes = read_routes(folder / ROUTES)
     return Scan(
@@ -178,24 +197,24 @@ def _build_procedural(seed: int, target: Path) -> None:
     staging = staging_dir(target)
     try:
         write_scan(generate_house(seed), staging)
+        write_manifest(staging, _procedural_inputs(seed))
         atomic_replace_dir(staging, target)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
         raise
 
 
-def _procedural_is_current(folder: Path) -> bool:
+def _procedural_inputs(seed: int) -> dict[str, Any]:
+    """What a procedural house is derived from: its seed, the generator and the recipe."""
     from havln_mj.scene.procedural.generate import GENERATOR_VERSION
     from havln_mj.scene.procedural.recipe import load_recipe
 
-    try:
-        meta = json.loads((folder / META).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return False
-    return (
-        meta.get("generator_version") == GENERATOR_VERSION
-        and meta.get("recipe") == load_recipe().digest
-    )
+    return {
+        "kind": "procedural",
+        "seed": seed,
+        "generator_version": GENERATOR_VERSION,
+        "recipe": load_recipe().digest,
+    }
 
 
 def load_scan(
@@ -207,13 +226,17 @@ def load_scan(
 ) -> Scan:
     """Loads a scene by id, building and caching it on first use.
 
+    A cached scan is used only when it is whole (every file as written) and was built from the
+    inputs the scene would be built from now (:mod:`havln_mj.scene.cache_keys`); otherwise it
+    is rebuilt, with a warning when it was damaged.
+
     Args:
         scene: ``proc-<seed>``, a Matterport scan id, or the path of a scan folder.
         rebuild: Rebuild the cached scan even if it is current.
         mp3d_dir: Root of the user's Matterport3D data (raw or habitat layout); default
-            ``$HAVLN_MP3D_DIR``.
+            ``$HAVLN_MP3D_DIR``, else the root the cached scan was built from.
         connectivity_dir: Folder of ``<scan>_connectivity.json`` graphs; default
-            ``$HAVLN_CONNECTIVITY_DIR``.
+            ``$HAVLN_CONNECTIVITY_DIR``, else the folder the cached scan was built from.
 
     Returns:
         The scan. A Matterport scan uses the user's mesh when found, else a graph proxy.
@@ -223,39 +246,67 @@ def load_scan(
             the nearest known id).
         MissingDataError: A Matterport scan whose graph (and mesh) cannot be found; the message
             says where it looked and how to get the data.
+        MalformedDataError: A Matterport graph no building can be built around.
     """
     sid = parse_scene_id(scene, known_scene_ids())
     if sid.kind == "folder":
         return read_scan_folder(sid.path)
     target = scans_dir() / sid.text
     if sid.kind == "matterport":
-        from havln_mj.scene.realscan import build_real_scan, real_scan_is_current
+        from havln_mj.scene.realscan import RealScanSources, build_real_scan
 
-        if rebuild or not real_scan_is_current(target, mp3d_dir, connectivity_dir):
-            build_real_scan(sid.text, target, mp3d_dir, connectivity_dir)
-        return read_scan_folder(target, sid.text)
+        sources = RealScanSources.find(sid.text, mp3d_dir, connectivity_dir, target)
+        return _cached(
+            target, sid.text, sources.inputs(), lambda: build_real_scan(sources, target), rebuild
+        )
     assert sid.seed is not None
-    if rebuild or not _procedural_is_current(target):
-        _build_procedural(sid.seed, target)
-        return _validated(read_scan_folder(target, sid.text))
-    try:
-        return _validated(read_scan_folder(target, sid.text))
-    except (MalformedDataError, MissingDataError) as exc:
-        log.warning("cached scan %s is damaged (%s); rebuilding it", target, exc)
-        _build_procedural(sid.seed, target)
-        return _validated(read_scan_folder(target, sid.text))
+    seed = sid.seed
+    return _cached(
+        target, sid.text, _procedural_inputs(seed), lambda: _build_procedural(seed, target), rebuild
+    )
 
 
-def _validated(scan: Scan) -> Scan:
-    """Checks the cached mesh so a damaged entry is caught here, not in the builder.
+def _cached(
+    target: Path,
+    scene_id: str,
+    inputs: dict[str, Any] | None,
+    build: Callable[[], None],
+    rebuild: bool,
+) -> Scan:
+    """The scan cached at ``target``, (re)built first unless whole and built from ``inputs``.
 
-    A binary glTF is checked for wholeness without being parsed (parsing loads trimesh, which
-    only rendering and collision building need); other meshes are read once.
+    ``inputs`` None (they cannot be found now) accepts any whole cached scan.
     """
-    if scan.mesh_path.suffix == ".glb":
-        from havln_mj.scene.mesh import check_glb
+    if not rebuild and target.is_dir():
+        try:
+            built_from = read_manifest(target)
+            if inputs is None or built_from == json.loads(json.dumps(inputs)):
+                return _cross_checked(read_scan_folder(target, scene_id))
+            log.info("cached scan %s was built from other inputs; rebuilding it", target)
+        except (MalformedDataError, MissingDataError) as exc:
+            if (target / MANIFEST).is_file():
+                log.warning("cached scan %s is damaged (%s); rebuilding it", target, exc)
+            else:
+                log.info("cached scan %s has no manifest (%s); rebuilding it", target, exc)
+    build()
+    return _cross_checked(read_scan_folder(target, scene_id))
 
-        check_glb(scan.mesh_path)
-    else:
-        scan.mesh_parts  # noqa: B018 - loads and caches the parts
+
+def _cross_checked(scan: Scan) -> Scan:
+    """A built scan whose files agree with each other (else MalformedDataError)."""
+    where = f"cached scan {scan.folder}"
+    if scan.kind in ("procedural", "graph proxy") and scan.boxes is None:
+        raise MalformedDataError(f"{where}: a {scan.kind} needs its {BOXES}")
+    ids = set(scan.graph.ids)
+    assert scan.regions is not None  # read_scan_folder always gives regions
+    stray = sorted(set(scan.regions.viewpoint_region) - ids)
+    if stray:
+        raise MalformedDataError(
+            f"{where}: {REGIONS} names viewpoints not in the graph: {stray[:3]}"
+        )
+    unknown = sorted({v for edge in scan.routes for v in edge} - ids)
+    if unknown:
+        raise MalformedDataError(
+            f"{where}: {ROUTES} names viewpoints not in the graph: {unknown[:3]}"
+        )
     return scan

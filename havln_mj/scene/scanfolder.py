@@ -7,3 +7,5 @@ REGIONS = "regions.json"  # levels, regions, objects, viewpoint -> region
 BOXES = "boxes.json"  # optional exact box geometry (procedural houses, graph proxies)
 ROUTES = "routes.json"  # optional: edges walked by a route, not straight (graph proxies)
 META = "scan.json"  # scene id, kind, provenance
+MANIFEST = "manifest.json"
+"""A cached scan's manifest of its inputs and files (see :mod:`~havln_mj.scene.cache_keys`)."""

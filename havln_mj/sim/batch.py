@@ -5,6 +5,11 @@ arguments): it starts the elements' bodies, turns graph actions into body moves 
 rules (discretised or continuous), advances each element's clock by what its body reports,
 computes the collision signal along the body's track, renders the state through the frame
 pipeline and, when a film is set, frames during actions.
+
+What the collision signal covers and which time people are posed at follow the batch's
+:class:`~havln_mj.sim.rules.CollisionRule` and :class:`~havln_mj.sim.rules.HumanClock`
+(strict by default; HA3D's on request). Each element's people are posed at its
+``people_t``: its own simulated time, or the time of HA3D's shared frame counter.
 """
 
 from __future__ import annotations
@@ -23,11 +28,15 @@ from havln_mj.sim.crowd import (
     NearMemo,
     Proximity,
     batch_proximity,
+    ha3d_points,
+    knots_proximity,
     sample_knots,
+    state_proximity,
 )
 from havln_mj.sim.frame import View
 from havln_mj.sim.images import ImageFormat
 from havln_mj.sim.navigation import NavTable
+from havln_mj.sim.rules import CollisionRule, HumanClock
 from havln_mj.sim.settings import Settings
 from havln_mj.sim.state import SimState, ViewPoint
 from havln_mj.sim.viewing import (
@@ -55,6 +64,8 @@ class Element:
         "heading",
         "navigable",
         "people",
+        "people_t",
+        "people_xyz",
         "state",
         "step",
         "table",
@@ -65,7 +76,8 @@ class Element:
     def __init__(self, table: NavTable, crowd: Crowd, body: Body) -> None:
         self.table, self.crowd, self.body = table, crowd, body
         self.people = len(crowd) > 0
-        self.heading = self.elevation = self.time = 0.0
+        self.heading = self.elevation = self.time = self.people_t = 0.0
+        self.people_xyz: np.ndarray | None = None  # pelvis positions at people_t, once asked
         self.view_index = self.step = 0
         self.navigable: list[ViewPoint] = []
         self.state: SimState | None = None
@@ -79,8 +91,13 @@ class Batch:
         cfg: The simulator's settings (read at every step: the camera may change).
         kind: Makes the bodies.
         image_format: Turns rendered views into state images.
-        collision_distance: HA-VLN's collision threshold (metres, horizontal).
+        rule: When and how collisions are measured (its threshold included).
         timers: The simulator's timers (rendering time and frames are added).
+
+    Attributes:
+        rule: The collision rule (read at every state).
+        clock: The people's clock.
+        frame: HA3D's shared frame counter (with ``clock.kind == "ha3d"``).
     """
 
     def __init__(
@@ -88,17 +105,19 @@ class Batch:
         cfg: Settings,
         kind: BodyKind,
         image_format: ImageFormat,
-        collision_distance: float,
+        rule: CollisionRule,
         timers: dict,
     ) -> None:
         self.cfg, self.kind, self.format = cfg, kind, image_format
-        self.collision_distance = collision_distance
+        self.rule = rule
+        self.clock = HumanClock.continuous()
+        self.frame = 0
         self.timers = timers
         self.elements: list[Element] = []
         self.film: tuple[float, FilmCallback, tuple[str, ...]] | None = None
         self.reactions = None  # how people react to the agent (None: they do not)
-        self._cos_fov: float | None = None
         self._near = NearMemo()
+        self._cos_fov: float | None = None
         self._blank: tuple[np.ndarray, np.ndarray] | None = None
 
     def view(self, heading: float, elevation: float) -> tuple[float, float, int]:
@@ -127,12 +146,21 @@ class Batch:
             elements.append(el)
         self.elements = elements
         self._prepare_step()
+        shared = self._tick(self.clock.after_start)
         started = []
         for i, (el, start) in enumerate(zip(elements, starts, strict=True)):
+            el.people_t = shared if shared is not None else el.time
             el.film = self._new_film(i, el)
             outcome = el.body.start(start[2], el.heading, el.elevation, 0.0)
             started.append((el, outcome, None, el.elevation, 0))
         self._settle_all(started, starting=True)
+
+    def _tick(self, advance: Callable[[int], int]) -> float | None:
+        """Advances HA3D's shared counter and returns the people's time (None: own clocks)."""
+        if self.clock.kind != "ha3d":
+            return None
+        self.frame = advance(self.frame)
+        return self.clock.seconds(self.frame)
 
     def _new_film(self, i: int, el: Element) -> Film | None:
         if self.film is None or not self.cfg.rendering:
@@ -142,8 +170,10 @@ class Batch:
         def draw(t: float) -> None:
             t0 = time.perf_counter()
             settings = self.cfg.view_settings()
-            views = [el.body.render(settings, el.elevation, t)]
-            views += [el.body.render(settings, 0.0, t, cam) for cam in cameras]
+            # On HA3D's clock people hold the pose of the state the action leads to.
+            people_t = t if self.clock.kind == "continuous" else el.people_t
+            views = [el.body.render(settings, el.elevation, people_t)]
+            views += [el.body.render(settings, 0.0, people_t, cam) for cam in cameras]
             self.timers["render"] += time.perf_counter() - t0
             self.timers["frames"] += len(views)
             callback(i, t, views, np.asarray(el.body.pose(), float))
@@ -155,15 +185,19 @@ class Batch:
     ) -> None:
         """Move, then rotate, for each (element, index, dh, de); ``waits`` override WAIT_S.
 
-        The collision signal of every element with people is computed in one call once they
-        have all moved.
+        Measured along the actions, the collision signal of every element with people is
+        computed in one call once they have all moved.
         """
         cfg = self.cfg
         discretized, (lo, hi) = cfg.discretized, cfg.elevation_limits
         self._prepare_step()
+        shared = self._tick(self.clock.after_action) if actions else None
+        along = self.rule.check == "action"
         elements, deferred = self.elements, []
         for n, (i, k, dh, de) in enumerate(actions):
             el = elements[i]
+            if shared is not None:
+                el.people_t = shared
             if discretized:
                 dh = discrete_delta(dh, HEADING_INCREMENT)
                 de = discrete_delta(de, ELEVATION_INCREMENT)
@@ -178,19 +212,24 @@ class Batch:
             target = el.navigable[k].viewpointId
             wait_s = WAIT_S if waits is None else waits[n]
             outcome = el.body.move(target, heading, elevation, el.time, wait_s, el.film)
-            if el.people:
+            if not el.people:
+                self._settle(el, outcome, heading, elevation, index, NO_PROXIMITY)
+            elif along:
                 deferred.append((el, outcome, heading, elevation, index))
             else:
-                self._settle(el, outcome, heading, elevation, index, NO_PROXIMITY)
+                self._settle(el, outcome, heading, elevation, index, None)
         if deferred:
             self._settle_all(deferred)
 
     def robot(self, actions: Sequence[str]) -> None:
         """A robot action per element (``"stop"`` leaves it alone)."""
         self._prepare_step()
+        shared = self._tick(self.clock.after_action)
         moved = []
         for el, act in zip(self.elements, actions, strict=True):
             if act != "stop":
+                if shared is not None:
+                    el.people_t = shared
                 outcome = el.body.robot_action(act, el.time, el.film)
                 moved.append((el, outcome, None, el.elevation, 0))
         self._settle_all(moved)
@@ -204,10 +243,15 @@ class Batch:
     def _settle_all(self, moved: list[tuple], starting: bool = False) -> None:
         """Settles each ``(element, outcome, heading asked, elevation, view index)``.
 
-        The collision signal of all of them is computed in one call.
+        Measured along the actions, the collision signal of all of them is computed in one
+        call; measured in the states, each after its state's view.
         """
-        tracks = [(el.crowd, outcome.knots) for el, outcome, *_ in moved]
-        contacts = batch_proximity(tracks, self.collision_distance, self._near)
+        contacts: list[Proximity | None]
+        if self.rule.check == "action":
+            tracks = [(el.crowd, outcome.knots) for el, outcome, *_ in moved]
+            contacts = batch_proximity(tracks, self.rule.threshold, self._near)
+        else:
+            contacts = [None if m[0].people else NO_PROXIMITY for m in moved]
         for m, contact in zip(moved, contacts, strict=True):
             self._settle(*m, contact, starting)
 
@@ -218,23 +262,29 @@ class Batch:
         heading: float | None,
         elevation: float,
         index: int,
-        contact: Proximity,
+        contact: Proximity | None,
         starting: bool = False,
     ) -> None:
         """Advances ``el``'s clock and view by ``outcome`` and publishes its state.
 
         ``heading`` is the heading the action asked for (None: the view rules are applied to
-        the body's heading, as for robot actions and starts).
+        the body's heading, as for robot actions and starts); ``contact`` the collision
+        signal (None: measured in the state reached, by the batch's rule).
         """
         if not starting:
             el.time += outcome.duration
             el.step += 1
+        if self.clock.kind == "continuous":
+            el.people_t = el.time
+        el.people_xyz = None
         if heading is None or outcome.heading != heading:
             heading, elevation, index = self.view(outcome.heading, elevation)
         el.heading, el.elevation, el.view_index = heading, elevation, index
         el.navigable = navigable = el.table.candidates(
             outcome.viewpoint, heading, elevation, self._cos_fov
         )
+        if contact is None:
+            contact = self._contact(el, outcome)
         if self._blank is None:
             if starting and el.film is not None:
                 el.film.tick(el.time)
@@ -263,12 +313,36 @@ class Batch:
             outcome.diverged,
         )
 
+    def _contact(self, el: Element, outcome: Outcome) -> Proximity:
+        """The collision signal of the state just reached, by a rule measuring in states.
+
+        (A rule measuring along actions is computed for the whole batch: :meth:`_settle_all`.)
+        """
+        rule = self.rule
+        if rule.distance == "camera_3d":
+            camera = el.navigable[0].position
+            return state_proximity(self.collision_points(el), camera, rule.threshold)
+        base = np.asarray(outcome.knots, float).reshape(-1, 4)[-1, 1:]
+        return knots_proximity(el.crowd, [(el.people_t, *base)], rule.threshold)
+
+    def people_at(self, el: Element) -> np.ndarray:
+        """Element ``el``'s people's pelvis positions ``(P, 3)`` as its state has them."""
+        if el.people_xyz is None:
+            el.people_xyz = el.crowd.positions(np.array([el.people_t]))[0]
+        return el.people_xyz
+
+    def collision_points(self, el: Element) -> np.ndarray:
+        """The people as the collision rule measures them: pelvis positions or HA3D's points."""
+        if self.rule.distance == "camera_3d":
+            return ha3d_points(el.crowd, self.people_at(el))
+        return self.people_at(el)
+
     def _images(self, el: Element) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         cfg = self.cfg
         if not cfg.rendering:
             return (*self.format.blank(cfg.width, cfg.height), None)
         t0 = time.perf_counter()
-        view = el.body.render(self.cfg.view_settings(), el.elevation, el.time)
+        view = el.body.render(self.cfg.view_settings(), el.elevation, el.people_t)
         images = self.format.images(view)
         self.timers["render"] += time.perf_counter() - t0
         self.timers["frames"] += 1

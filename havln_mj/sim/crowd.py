@@ -19,6 +19,10 @@ The signal runs on every action, so it is computed as a lookup: a crowd that off
 people's pelvis tracks tabulated once and read at all of an action's samples, for all people
 and all of a batch's tracks among them, in one vectorised pass; who is near a straight track
 is remembered (:class:`NearMemo`). Other crowds are asked for :meth:`Crowd.positions`.
+
+HA3D measured otherwise (see :mod:`havln_mj.sim.rules`): only in each state, in 3-D from the
+agent's camera to one tracked point per person (:func:`ha3d_points`,
+:func:`state_proximity`).
 """
 
 from __future__ import annotations
@@ -29,6 +33,8 @@ from collections.abc import Sequence
 from typing import NamedTuple, Protocol
 
 import numpy as np
+
+from havln_mj.errors import InvalidArgumentError
 
 COLLISION_DISTANCE = 1.0
 """HA-VLN's collision threshold in metres (horizontal, from the agent's base to a pelvis)."""
@@ -369,4 +375,69 @@ def track_proximity(
     closest = d.min(axis=0)
     hit = tuple(int(index[k]) for k in np.flatnonzero(closest <= distance))
     smallest = float(closest.min())
+    return Proximity(bool(hit), hit, smallest if smallest < NEAR_M else math.inf)
+
+
+# ---------------------------------------------------------------------- HA3D's distance
+
+HA3D_TRACK_HEIGHT = 1.36
+"""How high above a person's floor HA3D's tracked point is, in metres.
+
+HA3D stands each body 1.36 m below its viewpoint's camera and tracks the mesh vertex nearest
+the body's floor origin, mapped back up by 1.36 m (``src/utils/get_info.py``,
+``getHumanLocations``)."""
+
+
+def person_floors(crowd: Crowd) -> np.ndarray:
+    """Each person's floor height ``(P,)``: the z of their anchor (the floor point placed).
+
+    Raises:
+        InvalidArgumentError: The crowd does not say where its people stand
+            (``crowd.people[k].anchor``), which HA3D's distance needs.
+    """
+    people = getattr(crowd, "people", None)
+    if people is None:
+        if len(crowd) == 0:
+            return np.zeros(0)
+        raise InvalidArgumentError(
+            f"{type(crowd).__name__} does not give its people's floor points "
+            "(people[k].anchor); HA3D's collision distance needs them"
+        )
+    return np.array([float(p.anchor[2]) for p in people])
+
+
+def ha3d_points(crowd: Crowd, pelvis: np.ndarray) -> np.ndarray:
+    """HA3D's tracked point of each person: ``(P, 3)``.
+
+    The pelvis's horizontal position at :data:`HA3D_TRACK_HEIGHT` above the person's floor
+    (HA3D tracked a foot-level vertex of each body and lifted it to camera height).
+
+    Args:
+        crowd: The people.
+        pelvis: Their pelvis positions ``(P, 3)`` at one time (``crowd.positions``).
+    """
+    points = np.array(pelvis, float).reshape(-1, 3)
+    points[:, 2] = person_floors(crowd) + HA3D_TRACK_HEIGHT
+    return points
+
+
+def state_proximity(
+    points: np.ndarray, camera: np.ndarray | Sequence[float], distance: float = COLLISION_DISTANCE
+) -> Proximity:
+    """HA3D's collision signal of one state: the 3-D distance from the camera to each point.
+
+    Args:
+        points: The people's tracked points ``(P, 3)`` (:func:`ha3d_points`).
+        camera: The agent's camera position (HA3D: the viewpoint it stands on).
+        distance: Collision when a point is at most this far (metres).
+
+    Returns:
+        The people within ``distance`` and the smallest distance to anyone (exact below
+        :data:`NEAR_M`, else ``inf``).
+    """
+    if len(points) == 0:
+        return NO_PROXIMITY
+    d = np.linalg.norm(np.asarray(points, float) - np.asarray(camera, float), axis=1)
+    hit = tuple(int(k) for k in np.flatnonzero(d <= distance))
+    smallest = float(d.min())
     return Proximity(bool(hit), hit, smallest if smallest < NEAR_M else math.inf)

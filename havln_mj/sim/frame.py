@@ -23,6 +23,7 @@ import mujoco
 import numpy as np
 
 from havln_mj import groups
+from havln_mj.errors import HavlnError, RenderingUnavailableError
 from havln_mj.sim.crowd import Crowd
 
 if TYPE_CHECKING:
@@ -107,7 +108,15 @@ class Frames:
         return meshes
 
     def camera(self, name: str, settings: ViewSettings) -> Camera:
-        """The camera ``name`` set up for ``settings`` (remade only when the size changes)."""
+        """The camera ``name`` set up for ``settings`` (remade only when the size changes).
+
+        A new size gets a new camera before the old one is closed, so when the new one cannot
+        be made the old one keeps rendering.
+
+        Raises:
+            RenderingUnavailableError: No camera of that size can be made here (the message
+                says so and what still works).
+        """
         entry = self._cameras.get(name)
         if entry is not None:
             cam, old = entry
@@ -116,13 +125,32 @@ class Frames:
                     cam.set_vfov(math.degrees(settings.vfov))
                 self._cameras[name] = (cam, settings)
                 return cam
-            cam.close()
-            del self._cameras[name]
-        from havln_mj.render.camera import Camera
-
-        cam = Camera(self.model, name, settings.width, settings.height, math.degrees(settings.vfov))
+        cam = self._new_camera(name, settings)
+        if entry is not None:
+            entry[0].close()
         self._cameras[name] = (cam, settings)
         return cam
+
+    def _new_camera(self, name: str, settings: ViewSettings) -> Camera:
+        from havln_mj.render.camera import Camera  # rendering: not imported with the simulator
+
+        vis = self.model.vis.global_
+        buffer = (int(vis.offwidth), int(vis.offheight))
+        try:
+            return Camera(
+                self.model, name, settings.width, settings.height, math.degrees(settings.vfov)
+            )
+        except BaseException as exc:
+            # Camera enlarges the model's offscreen buffer first: a size that failed must not
+            # carry over to the cameras made after it.
+            vis.offwidth, vis.offheight = buffer
+            if isinstance(exc, HavlnError) or not isinstance(exc, Exception):
+                raise
+            raise RenderingUnavailableError(
+                f"cannot render {settings.width}×{settings.height} images from camera {name!r} "
+                f"here ({type(exc).__name__}: {exc}); set a smaller resolution (rendering at the "
+                "sizes that worked before is unaffected)"
+            ) from exc
 
     def render(
         self,

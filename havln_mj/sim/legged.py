@@ -219,16 +219,21 @@ class LeggedAgent:
         self.people = PeopleWriter(world.model, len(world.crowd.shapes))
         self.fell = False
         self.diverged = False
+        self._last_good: tuple[np.ndarray, float] | None = None  # frozen once diverged
 
     # --------------------------------------------------------------------- state
 
     def position(self) -> np.ndarray:
-        """True trunk position ``(x, y, z)``."""
+        """True trunk position ``(x, y, z)`` (after diverged physics: the last one trusted)."""
+        if self._last_good is not None:
+            return self._last_good[0].copy()
         p = self.body.true_pose()
         return np.array([p.x, p.y, p.z])
 
     def heading(self) -> float:
-        """True heading (radians, from +y turning right)."""
+        """True heading (radians, from +y turning right; after divergence the last trusted)."""
+        if self._last_good is not None:
+            return self._last_good[1]
         return self.body.true_pose().heading
 
     def place(self, position: np.ndarray, floor_z: float, heading: float, t: float) -> None:
@@ -237,6 +242,7 @@ class LeggedAgent:
         self.body.reset(float(position[0]), float(position[1]), float(floor_z), heading)
         self.fell = self.body.fallen
         self.diverged = False
+        self._last_good = None
 
     def pose_people(self, t: float) -> None:
         """Writes the people's poses at simulated time ``t`` into this agent's data."""
@@ -303,10 +309,12 @@ class LeggedAgent:
         times, points, touches = [t0], [self.position()], [0]
         physical = self.world.options.physical_humans
         warnings0 = _warning_counts(d)
+        trusted = [self.position(), self.heading()]
 
         def tick(physics_time: float) -> None:
             if _warning_counts(d) != warnings0:
                 raise _DivergedError
+            trusted[:] = [self.position(), self.heading()]
             t = t0 + physics_time - start_time
             if physical:
                 self.pose_people(t)  # solid people must move with the physics
@@ -335,6 +343,7 @@ class LeggedAgent:
         except _DivergedError:
             # MuJoCo has reset the state: the pose is no longer the robot's, keep the last.
             self.diverged = True
+            self._last_good = (trusted[0], trusted[1])
         self.fell = self.body.fallen or self.diverged
         track = np.column_stack([np.array(times), np.array(points)])
         return WalkResult(

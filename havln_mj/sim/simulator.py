@@ -10,7 +10,9 @@ Matterport3DSimulator's ``MatterSim.Simulator``). On top of MatterSim:
   an optional human mask. ``state.isCrushed`` is 1 when the agent came within the collision
   distance of a person at any time during the last action (for the start state: at the
   start), in every mode (HA3D computed it only with rendering off); ``getHumanState()``
-  gives everyone's state.
+  gives everyone's state. ``collision_rule="ha3d"`` and ``human_clock="ha3d"`` measure it
+  as HA3D's code did instead (only in each state, 3-D from the camera, people on one shared
+  frame counter; see :mod:`havln_mj.sim.rules`).
 * **Clock**: every action advances the element's simulated time (``state.time``) by its
   duration: the move at ``speed`` m/s, then the turn at ``turn_rate`` rad/s (the larger of
   the heading and elevation change); an action that neither moves nor turns is a wait of
@@ -65,6 +67,7 @@ from havln_mj.sim.crowd import COLLISION_DISTANCE, NO_CROWD, Crowd
 from havln_mj.sim.egocentric import DEFAULT_TURN, EgoAction, ego_to_mattersim, parse_ego_action
 from havln_mj.sim.images import ImageFormat
 from havln_mj.sim.navigation import NavTable
+from havln_mj.sim.rules import CollisionRule, HumanClock
 from havln_mj.sim.scenes import SceneLibrary
 from havln_mj.sim.settings import SimulatorSettings, _check_angle
 from havln_mj.sim.state import SimState
@@ -104,6 +107,9 @@ class Simulator(SimulatorSettings):
         legged: object | None = None,
         together: float = 0.0,
         reactions: bool | object = False,
+        collision_rule: str | CollisionRule = "strict",
+        human_clock: str | HumanClock = "continuous",
+        pinned_people: bool = False,
     ) -> None:
         """Creates an uninitialised simulator with MatterSim's default settings.
 
@@ -126,6 +132,15 @@ class Simulator(SimulatorSettings):
             reactions: Whether people notice the agent (walkers yield, others glance), or
                 a :class:`~havln_mj.humans.reactions.Reactions` saying how; each batch
                 element's people react to that element alone.
+            collision_rule: ``"strict"`` (along every action, horizontally; the default),
+                ``"ha3d"`` (in each state, 3-D from the camera) or a
+                :class:`~havln_mj.sim.rules.CollisionRule`; a name uses
+                ``collision_distance`` as the threshold.
+            human_clock: ``"continuous"`` (each element's simulated time), ``"ha3d"``
+                (HA3D's shared frame counter) or a :class:`~havln_mj.sim.rules.HumanClock`.
+            pinned_people: People play their motions on the floor points they were placed
+                at, never leaving them (:class:`~havln_mj.sim.people.PinnedCrowd`; HA3D's
+                people barely leave their viewpoints). Not with ``reactions``.
         """
         super().__init__()
         for name, value in (
@@ -143,6 +158,11 @@ class Simulator(SimulatorSettings):
             raise InvalidArgumentError(f"together must be a chance in [0, 1], got {together!r}")
         self._together = float(together)
         self._reactions = _reactions(reactions)
+        if not isinstance(pinned_people, bool):
+            raise InvalidArgumentError(f"pinned_people takes a bool, got {pinned_people!r}")
+        if pinned_people and self._reactions is not None:
+            raise InvalidArgumentError("pinned_people=True needs people who do not react")
+        self._pinned = pinned_people
         self._humans = humans
         self._body_name = body
         self._legged_options = legged
@@ -154,6 +174,9 @@ class Simulator(SimulatorSettings):
         self._library: SceneLibrary | None = None
         self._kind: BodyKind | None = None
         self._batch: Batch | None = None
+        self._rule = CollisionRule.strict(self._collision_distance)
+        self._clock, self._frame = HumanClock.continuous(), 0
+        self.set_rules(collision_rule, human_clock)
         self._rng = np.random.default_rng(self._cfg.seed)
         self._crowd_of: dict[str, Crowd] = {}
         self._film: tuple[float, FilmCallback, tuple[str, ...]] | None = None
@@ -174,7 +197,8 @@ class Simulator(SimulatorSettings):
             self._legged_options,
         )
         image_format = ImageFormat(cfg.color_order, cfg.depth_units)
-        self._batch = Batch(cfg, self._kind, image_format, self._collision_distance, self._timers)
+        self._batch = Batch(cfg, self._kind, image_format, self._rule, self._timers)
+        self._batch.clock, self._batch.frame = self._clock, self._frame
         self._batch.film = self._film
         self._batch.reactions = self._reactions
         self._rng = np.random.default_rng(cfg.seed)
@@ -183,7 +207,10 @@ class Simulator(SimulatorSettings):
             from havln_mj.sim.people import HumanCrowds  # the humans package, only when used
 
             self._crowds = HumanCrowds(
-                self._library.scan, *self._human_files, together=self._together
+                self._library.scan,
+                *self._human_files,
+                together=self._together,
+                mp3d_dir=cfg.dataset_path,
             )
         else:
             self._crowds = self._humans or None
@@ -238,6 +265,64 @@ class Simulator(SimulatorSettings):
         if self._batch is not None:
             self._batch.film = self._film
 
+    def set_rules(
+        self,
+        collision_rule: str | CollisionRule | None = None,
+        human_clock: str | HumanClock | None = None,
+        frame: int | None = None,
+    ) -> None:
+        """When and how collisions are measured, and which time people are posed at.
+
+        Takes effect from the next state on; may be called at any time.
+
+        Args:
+            collision_rule: ``"strict"``, ``"ha3d"`` (both with the simulator's
+                ``collision_distance``) or a :class:`~havln_mj.sim.rules.CollisionRule`
+                (None: keep the current one).
+            human_clock: ``"continuous"``, ``"ha3d"`` or a
+                :class:`~havln_mj.sim.rules.HumanClock` (None: keep the current one).
+            frame: Where HA3D's counter (re)starts (an evaluation resumed mid-way sets the
+                counter it stopped at, :attr:`human_clock_frame`); None keeps the counter
+                when the clock stays the same, else starts it at 0.
+
+        Raises:
+            InvalidArgumentError: An unknown rule, clock or frame; HA3D's clock with a
+                per-action collision check, or with people who react (HA3D's poses people
+                only in states, and its people do not react).
+        """
+        rule = (
+            self._rule
+            if collision_rule is None
+            else _collision_rule(collision_rule, self._collision_distance)
+        )
+        clock = self._clock if human_clock is None else _human_clock(human_clock)
+        _check_pair(rule, clock, self._reactions)
+        if frame is None:
+            frame = self.human_clock_frame if clock == self._clock else 0
+        bad = isinstance(frame, bool) or not isinstance(frame, numbers.Integral)
+        if bad or not 0 <= frame < clock.frames:
+            raise InvalidArgumentError(
+                f"human clock frame must be an integer in [0, {clock.frames}), got {frame!r}"
+            )
+        self._rule, self._clock, self._frame = rule, clock, int(frame)
+        if self._batch is not None:
+            self._batch.rule, self._batch.clock, self._batch.frame = rule, clock, self._frame
+
+    @property
+    def collision_rule(self) -> CollisionRule:
+        """The collision rule in use."""
+        return self._rule
+
+    @property
+    def human_clock(self) -> HumanClock:
+        """The people's clock in use."""
+        return self._clock
+
+    @property
+    def human_clock_frame(self) -> int:
+        """HA3D's shared frame counter now (0 with the continuous clock)."""
+        return self._batch.frame if self._batch is not None else self._frame
+
     # ------------------------------------------------------------------ episodes
 
     def _per_element(self, name: str, values: object) -> list:
@@ -251,6 +336,10 @@ class Simulator(SimulatorSettings):
                 # Each scan's people depend on the seed and the scan, not on visiting order.
                 rng = np.random.default_rng([self._cfg.seed, zlib.crc32(table.scan_id.encode())])
                 crowd = self._crowds(table.scan_id, table.graph, rng)
+                if self._pinned and len(crowd):
+                    from havln_mj.sim.people import PinnedCrowd  # the humans package, when used
+
+                    crowd = PinnedCrowd(crowd)
             self._crowd_of[table.scan_id] = crowd
         return crowd
 
@@ -344,10 +433,28 @@ class Simulator(SimulatorSettings):
         return self._batch.elements[element].crowd
 
     def crowd(self, scan_id: str) -> Crowd:
-        """The people of ``scan_id`` (made on first use from the seed and the scan)."""
+        """The people of ``scan_id`` (made on first use from the seed and the scan).
+
+        Raises:
+            MissingDataError: A real scan the placement file does not list, without region
+                labels to place people by (see :mod:`havln_mj.sim.people`).
+        """
         if not self._initialized:
             self.initialize()
         return self._crowd(self._library.table(scan_id))
+
+    def people_source(self, scan_id: str) -> str:
+        """Where the people of ``scan_id`` come from, in words (for banners and reports).
+
+        Raises:
+            MissingDataError: As :meth:`crowd`.
+        """
+        if not self._initialized:
+            self.initialize()
+        if self._crowds is None:
+            return "none (humans=False)"
+        source = getattr(self._crowds, "source", None)
+        return source(scan_id) if source is not None else "the simulator's crowd factory"
 
     def draw(self, element: int = 0) -> tuple[mujoco.MjModel, mujoco.MjData]:
         """Element ``element``'s world posed at its time: the people, the body, its camera.
@@ -368,7 +475,7 @@ class Simulator(SimulatorSettings):
         ):
             raise InvalidArgumentError(f"element {element!r} out of range; valid 0–{n - 1}")
         el = self._batch.elements[element]
-        return el.body.scene(el.elevation, el.time)
+        return el.body.scene(el.elevation, el.people_t)
 
     # ------------------------------------------------------------------ actions
 
@@ -523,21 +630,33 @@ class Simulator(SimulatorSettings):
         return [el.state for el in self._batch.elements]
 
     def getHumanState(self) -> list[list]:  # noqa: N802
-        """Each element's people at the element's time: a list of states per element.
+        """Each element's people as its state has them: a list of states per element.
 
-        A state (:class:`havln_mj.humans.crowd.PersonState`) has ``position`` (pelvis),
-        ``heading``, ``velocity``, ``activity``, ``text`` and ``region``.
+        People are posed at the element's time (on HA3D's clock, at the shared counter's
+        time of the element's last state). A state
+        (:class:`havln_mj.humans.crowd.PersonState`) has ``position`` (pelvis), ``heading``,
+        ``velocity``, ``activity``, ``text`` and ``region``.
         """
         self._started("getHumanState")
-        return [el.crowd.states(el.time) for el in self._batch.elements]
+        return [el.crowd.states(el.people_t) for el in self._batch.elements]
 
     def getHumanPositions(self) -> list[np.ndarray]:  # noqa: N802 - getHumanState's sibling
-        """Each element's people's pelvis positions ``(K, 3)`` at the element's time.
+        """Each element's people's pelvis positions ``(K, 3)`` as its state has them.
 
         The ``position`` of every :meth:`getHumanState` entry, without computing the rest.
         """
         self._started("getHumanPositions")
-        return [el.crowd.positions(np.array([el.time]))[0] for el in self._batch.elements]
+        return [self._batch.people_at(el).copy() for el in self._batch.elements]
+
+    def collision_points(self) -> list[np.ndarray]:
+        """Each element's people as the collision rule measures them: ``(K, 3)`` each.
+
+        Pelvis positions (the strict rule), or HA3D's tracked points
+        (:func:`~havln_mj.sim.crowd.ha3d_points`) with ``collision_rule="ha3d"``; at the
+        time of the element's last state.
+        """
+        self._started("collision_points")
+        return [np.array(self._batch.collision_points(el)) for el in self._batch.elements]
 
     def _started(self, what: str) -> None:
         if self._batch is None or not self._batch.elements:
@@ -547,7 +666,7 @@ class Simulator(SimulatorSettings):
 
     def resetTimers(self) -> None:  # noqa: N802
         """Zeroes the timers ``timingInfo`` reports."""
-        self._timers = {"process": 0.0, "render": 0.0, "frames": 0}
+        self._timers.update(process=0.0, render=0.0, frames=0)  # the batch shares the dict
 
     def timing(self) -> dict[str, float]:
         """Seconds in simulator calls and in rendering, and frames rendered, since the reset."""
@@ -574,6 +693,42 @@ class Simulator(SimulatorSettings):
     get_geodesic_distance = getGeodesicDistance
     get_state = getState
     get_human_state = getHumanState
+
+
+def _collision_rule(value: object, threshold: float) -> CollisionRule:
+    if isinstance(value, CollisionRule):
+        return value
+    named = {"strict": CollisionRule.strict, "ha3d": CollisionRule.ha3d}
+    if isinstance(value, str) and value in named:
+        return named[value](threshold)
+    raise InvalidArgumentError(
+        f"collision_rule {value!r} unknown; valid: 'strict', 'ha3d' or a CollisionRule"
+    )
+
+
+def _human_clock(value: object) -> HumanClock:
+    if isinstance(value, HumanClock):
+        return value
+    named = {"continuous": HumanClock.continuous, "ha3d": HumanClock.ha3d}
+    if isinstance(value, str) and value in named:
+        return named[value]()
+    raise InvalidArgumentError(
+        f"human_clock {value!r} unknown; valid: 'continuous', 'ha3d' or a HumanClock"
+    )
+
+
+def _check_pair(rule: CollisionRule, clock: HumanClock, reactions: object | None) -> None:
+    """HA3D's clock poses people only in states, and its people do not react."""
+    if clock.kind == "ha3d" and rule.check != "state":
+        raise InvalidArgumentError(
+            "HA3D's human clock poses people only in states: it needs a per-state collision "
+            "check (collision_rule='ha3d'), not the continuous one"
+        )
+    if clock.kind == "ha3d" and reactions is not None:
+        raise InvalidArgumentError(
+            "HA3D's human clock needs people who do not react (reactions=False): on one "
+            "shared frame counter there is no track for them to react to"
+        )
 
 
 def _reactions(value: object) -> object | None:

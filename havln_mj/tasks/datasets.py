@@ -17,6 +17,7 @@ JSON. Given a connectivity folder, every scan and viewpoint is checked against i
 from __future__ import annotations
 
 import json
+import logging
 import math
 import os
 from collections.abc import Iterable
@@ -43,6 +44,7 @@ DATA_ENV = "HAVLN_VLN_DATA"
 _HUMAN, _REL_DESC, _CRUX = "human", "Relative Position Description", "crux_points"
 _KEYS = ("distance", "scan", "path_id", "path", "heading", "instructions", _HUMAN, _REL_DESC, _CRUX)
 _HUMAN_KEYS = ("human_viewpoint", "human_rel_pos", "human_description")
+log = logging.getLogger(__name__)
 
 
 # ---------------------------------------------------------------------- file names
@@ -314,12 +316,39 @@ def load_dataset(
     """
     path = resolve_dataset_path(path_or_split, data_dir)
     episodes = read_episodes(path)
+    _report_instructions(episodes, path)
     if validate and connectivity_dir is not None:
         graphs = _Graphs(Path(connectivity_dir).expanduser())
         for i, e in enumerate(episodes):
             where = f"{path}[{i}]"
             validate_episode(e, graphs.get(e.scan, f"{where} (path_id {e.path_id})"), where)
     return Dataset(episodes, str(path))
+
+
+def _report_instructions(episodes: list[Episode], path: Path) -> None:
+    """Warns about instructions an agent cannot follow: blank ones, and paths without any."""
+    blank = [
+        f"{e.path_id}_{k}" for e in episodes for k, t in enumerate(e.instructions) if not t.strip()
+    ]
+    bare = [str(e.path_id) for e in episodes if not e.instructions]
+    if blank:
+        log.warning(
+            "%s: %d instruction(s) are blank (%s): they are kept as given, with no words to follow",
+            path,
+            len(blank),
+            _few(blank),
+        )
+    if bare:
+        log.warning(
+            "%s: %d path(s) have no instructions (path_id %s): no instruction of them is run",
+            path,
+            len(bare),
+            _few(bare),
+        )
+
+
+def _few(names: list[str]) -> str:
+    return ", ".join(names[:5]) + (", ..." if len(names) > 5 else "")
 
 
 def write_dataset(

@@ -17,6 +17,10 @@ Action sets, each a range of integers:
 * ``"robot"`` (GO1): :data:`~havln_mj.sim.body.ROBOT_ACTIONS` (0 stop, 1 forward 0.5 m,
   2 turn_left, 3 turn_right 45°).
 
+``protocol="ha3d"`` measures collisions as HA3D's code did (per state, 3-D from the camera,
+people on one shared frame counter; see :mod:`havln_mj.tasks.protocol`); ``"strict"`` (the
+default) along every action.
+
 ``info`` always has ``scan``, ``path_id``, ``instr_id``, ``instruction``, ``goal``,
 ``viewpoint``, ``distance`` (to the goal, from where the body truly is), ``time``,
 ``reward_terms``, ``collision``, ``fell``, ``arrived``, ``stopped``, ``success`` and
@@ -40,6 +44,7 @@ from havln_mj.sim.egocentric import EgoAction
 from havln_mj.tasks.datasets import load_dataset
 from havln_mj.tasks.episodes import Episode, Instruction
 from havln_mj.tasks.observations import Observations
+from havln_mj.tasks.protocol import TaskProtocol, get_protocol
 from havln_mj.tasks.rewards import RewardFn
 from havln_mj.tasks.step import STOP, Action, StepResult, TaskStep
 from havln_mj.tasks.vocab import Vocabulary
@@ -86,6 +91,8 @@ class EpisodeEnv:
         data_dir: Where split names are looked up (default ``$HAVLN_VLN_DATA``).
         scan_dir: The scans' mesh folder (the simulator's ``setDatasetPath``).
         humans: Whether scans have people.
+        human_placements: HA3D's placement file, which gives real scans their people
+            (default ``$HAVLN_HA3D_PLACEMENTS``; a real scan without it is an error).
         width: Image width (pixels).
         height: Image height (pixels).
         vfov: Vertical field of view (radians; default MatterSim's).
@@ -101,6 +108,9 @@ class EpisodeEnv:
         restricted_navigation: MatterSim's field-of-view rule for navigable viewpoints.
         reward: A reward name of :data:`havln_mj.tasks.rewards.REWARDS` or a function.
         reward_weights: Weight per reward term (default 1 for each).
+        protocol: ``"strict"`` (the default), ``"ha3d"`` or a
+            :class:`~havln_mj.tasks.protocol.TaskProtocol`: the simulator's collision rule
+            and human clock.
 
     Raises:
         InvalidArgumentError: A bad value (the message names it and what is valid).
@@ -119,6 +129,7 @@ class EpisodeEnv:
         data_dir: str | Path | None = None,
         scan_dir: str | Path | None = None,
         humans: bool = True,
+        human_placements: str | Path | None = None,
         width: int = 128,
         height: int = 128,
         vfov: float | None = None,
@@ -133,7 +144,9 @@ class EpisodeEnv:
         restricted_navigation: bool = False,
         reward: str | RewardFn = "paper",
         reward_weights: Mapping[str, float] | None = None,
+        protocol: str | TaskProtocol = "strict",
     ) -> None:
+        self.protocol = get_protocol(protocol)
         if action_set not in ACTION_SETS:
             raise InvalidArgumentError(
                 f"action set {action_set!r} unknown; valid: {', '.join(ACTION_SETS)}"
@@ -145,6 +158,7 @@ class EpisodeEnv:
         self._humans = bool(humans)
         self._restricted = bool(restricted_navigation)
         self._paths = (connectivity_dir, scan_dir)
+        self._placements = human_placements
         if isinstance(episode_seed, bool) or not isinstance(episode_seed, numbers.Integral):
             raise InvalidArgumentError(f"episode_seed must be an integer, got {episode_seed!r}")
         self.episode_seed = int(episode_seed)
@@ -210,7 +224,13 @@ class EpisodeEnv:
         from havln_mj.sim.simulator import Simulator
 
         obs = self.observations
-        sim = Simulator(humans=self._humans, body=self.body)
+        sim = Simulator(
+            humans=self._humans,
+            human_placements=self._placements,
+            body=self.body,
+            collision_rule=self.protocol.collision_rule,
+            human_clock=self.protocol.human_clock,
+        )
         connectivity_dir, scan_dir = self._paths
         if connectivity_dir is not None:
             sim.setNavGraphPath(connectivity_dir)
@@ -264,7 +284,9 @@ class EpisodeEnv:
         if self.sim is None:
             self.sim = self._make_sim()
             reward, weights = self._reward
-            self._task = TaskStep(self.sim, reward=reward, reward_weights=weights)
+            self._task = TaskStep(
+                self.sim, reward=reward, reward_weights=weights, protocol=self.protocol
+            )
         self.current = item
         self._tokens = self.vocab.encode(item.text, self.observations.length)
         self._last = self._task.start([item.episode])[0]

@@ -2,8 +2,10 @@
 
 * :func:`people_near` and :func:`blocked_nodes`: who the human-aware expert avoids and which
   viewpoints that closes. Distances to people are horizontal, from a viewpoint to a pelvis,
-  as the simulator's collision signal measures them; a person counts only on the viewpoint's
-  storey (pelvis between 0.5 m below and 2 m above the viewpoint's floor).
+  as the simulator's strict collision signal measures them; a person counts only on the
+  viewpoint's storey (pelvis between 0.5 m below and 2 m above the viewpoint's floor). With
+  ``distance="camera_3d"`` they are HA3D's: 3-D from the viewpoint's camera to each
+  person's tracked point (``tasks/HA/utils.py``: strictly closer than the radius).
 * :class:`PathPlanner` and :func:`plan_path`: shortest paths on ``NavGraph``'s graph (R2R's
   undirected graph, weighted by edge length, or counting hops as HA3D's expert does) with
   blocked viewpoints masked out, searched by ``scipy.sparse.csgraph``.
@@ -42,11 +44,6 @@ STOREY_BELOW, STOREY_ABOVE = 0.5, 2.0  # a pelvis this far below / above a floor
 # ---------------------------------------------------------------------- people
 
 
-def _floors(graph: NavGraph, nodes: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
-    xy = np.array([graph.position(v)[:2] for v in nodes]).reshape(-1, 2)
-    return xy, np.array([graph.floor_z(v) for v in nodes])
-
-
 def _near(xy: np.ndarray, floor: np.ndarray, people: np.ndarray, radius: float) -> np.ndarray:
     """(N,) bool: points (xy, floor height) with a pelvis within ``radius`` on their storey."""
     if len(people) == 0 or len(xy) == 0:
@@ -56,14 +53,38 @@ def _near(xy: np.ndarray, floor: np.ndarray, people: np.ndarray, radius: float) 
     return ((d <= radius) & (dz >= -STOREY_BELOW) & (dz <= STOREY_ABOVE)).any(axis=1)
 
 
+def _near_3d(cameras: np.ndarray, people: np.ndarray, radius: float) -> np.ndarray:
+    """(N,) bool: cameras strictly closer than ``radius`` (3-D) to any point (HA3D's test)."""
+    if len(people) == 0 or len(cameras) == 0:
+        return np.zeros(len(cameras), bool)
+    return (np.linalg.norm(cameras[:, None] - people[None], axis=2) < radius).any(axis=1)
+
+
 def people_near(
-    graph: NavGraph, vp: str, people: Iterable[np.ndarray], radius: float = SIGHT_RADIUS
+    graph: NavGraph,
+    vp: str,
+    people: Iterable[np.ndarray],
+    radius: float = SIGHT_RADIUS,
+    distance: str = "horizontal",
 ) -> np.ndarray:
-    """The pelvis positions ``(K, 3)`` within ``radius`` of viewpoint ``vp``, on its storey."""
+    """The people ``(K, 3)`` within ``radius`` of viewpoint ``vp``.
+
+    ``distance="horizontal"``: pelvis positions on the viewpoint's storey;
+    ``"camera_3d"``: points strictly closer than ``radius`` to its camera (HA3D).
+    """
     pts = np.asarray(list(people), float).reshape(-1, 3)
-    xy, floor = _floors(graph, [vp])
-    keep = [bool(_near(xy, floor, p[None], radius)[0]) for p in pts]
-    return pts[np.array(keep, bool)] if len(pts) else pts
+    return pts[_people_mask(graph.position(vp), graph.floor_z(vp), pts, radius, distance)]
+
+
+def _people_mask(
+    camera: np.ndarray, floor: float, people: np.ndarray, radius: float, distance: str
+) -> np.ndarray:
+    """(K,) bool: which of ``people`` are near a viewpoint (camera position, floor height)."""
+    if distance == "camera_3d":
+        return np.linalg.norm(people - camera, axis=1) < radius
+    d = np.hypot(people[:, 0] - camera[0], people[:, 1] - camera[1])
+    dz = people[:, 2] - floor
+    return (d <= radius) & (dz >= -STOREY_BELOW) & (dz <= STOREY_ABOVE)
 
 
 def blocked_nodes(
@@ -71,25 +92,36 @@ def blocked_nodes(
     people: Iterable[np.ndarray],
     clearance: float = CLEARANCE,
     keep: Iterable[str] = (),
+    distance: str = "horizontal",
 ) -> set[str]:
-    """The graph nodes within ``clearance`` of any of ``people`` (pelvis positions).
+    """The graph nodes within ``clearance`` of any of ``people``.
 
-    Nodes in ``keep`` (the agent's and the goal) are never blocked.
+    ``distance`` as in :func:`people_near`. Nodes in ``keep`` (the agent's and the goal) are
+    never blocked.
     """
-    xy, floor = _floors(graph, graph.nodes)
-    return _blocked(graph.nodes, xy, floor, people, clearance, keep)
+    return _blocked(graph.nodes, *_cameras(graph), people, clearance, keep, distance)
+
+
+def _cameras(graph: NavGraph) -> tuple[np.ndarray, np.ndarray]:
+    """Every node's camera position ``(N, 3)`` and floor height ``(N,)``."""
+    cameras = np.array([graph.position(v) for v in graph.nodes]).reshape(-1, 3)
+    return cameras, np.array([graph.floor_z(v) for v in graph.nodes])
 
 
 def _blocked(
     nodes: Sequence[str],
-    xy: np.ndarray,
+    cameras: np.ndarray,
     floor: np.ndarray,
     people: Iterable[np.ndarray],
     clearance: float,
     keep: Iterable[str],
+    distance: str,
 ) -> set[str]:
     pts = np.asarray(list(people), float).reshape(-1, 3)
-    hit = _near(xy, floor, pts, clearance)
+    if distance == "camera_3d":
+        hit = _near_3d(cameras, pts, clearance)
+    else:
+        hit = _near(cameras[:, :2], floor, pts, clearance)
     return {nodes[i] for i in np.flatnonzero(hit)} - set(keep)
 
 
@@ -127,14 +159,31 @@ class PathPlanner:
         self._length_list = lengths.data.tolist()
 
     @cached_property
-    def _floors(self) -> tuple[np.ndarray, np.ndarray]:
-        return _floors(self.graph, self.graph.nodes)
+    def _nodes(self) -> tuple[np.ndarray, np.ndarray]:
+        return _cameras(self.graph)
+
+    def people_near(
+        self,
+        vp: str,
+        people: np.ndarray,
+        radius: float = SIGHT_RADIUS,
+        distance: str = "horizontal",
+    ) -> np.ndarray:
+        """:func:`people_near` on this planner's graph (node positions read once)."""
+        k = self._order[vp]
+        cameras, floors = self._nodes
+        pts = np.asarray(people, float).reshape(-1, 3)
+        return pts[_people_mask(cameras[k], floors[k], pts, radius, distance)]
 
     def blocked(
-        self, people: Iterable[np.ndarray], clearance: float = CLEARANCE, keep: Iterable[str] = ()
+        self,
+        people: Iterable[np.ndarray],
+        clearance: float = CLEARANCE,
+        keep: Iterable[str] = (),
+        distance: str = "horizontal",
     ) -> set[str]:
         """:func:`blocked_nodes` on this planner's graph (node positions read once)."""
-        return _blocked(self.graph.nodes, *self._floors, people, clearance, keep)
+        return _blocked(self.graph.nodes, *self._nodes, people, clearance, keep, distance)
 
     def plan(
         self, start: str, goal: str, blocked: Iterable[str] = (), *, weighted: bool = True

@@ -10,8 +10,10 @@ a :class:`TaskStep`, so one rule holds everywhere:
   that has ended while others run). ``EgoAction.STOP`` and ``"stop"`` are STOP: the episode
   ends and the simulator is not called (no step, no time, no collision).
 * **Collision**: the start state counts (an agent placed within the collision distance of a
-  person has collided), then every action's ``isCrushed`` (the simulator's signal along the
-  whole action); STOP never collides.
+  person has collided), then every action's ``isCrushed`` (the simulator's signal: along the
+  whole action, or in HA3D's protocol in the state after it); STOP never collides. A
+  ``protocol`` (:mod:`havln_mj.tasks.protocol`) sets the simulator's collision rule and
+  human clock.
 * **Goal distance**: :meth:`~havln_mj.sim.simulator.Simulator.getGeodesicDistance` — from where the
   body truly is (the GO1's true pose on its level's navigability grid), the same for every caller.
 * **Reward**: the terms of :mod:`havln_mj.tasks.rewards` times their weights.
@@ -32,6 +34,7 @@ from havln_mj.errors import InvalidArgumentError, NotInitializedError
 from havln_mj.sim.egocentric import EgoAction
 from havln_mj.sim.state import SimState
 from havln_mj.tasks.episodes import Episode
+from havln_mj.tasks.protocol import TaskProtocol, get_protocol
 from havln_mj.tasks.rewards import SUCCESS_DISTANCE, RewardFn, StepOutcome, get_reward
 
 GraphAction = tuple[int, float, float]
@@ -98,9 +101,16 @@ class TaskStep:
         reward_weights: Weight per reward term (default 1 each).
         success_distance: Success when stopping strictly closer than this (metres).
         max_steps: Step cap per episode (None: no cap).
+        protocol: ``"strict"``, ``"ha3d"`` or a :class:`~havln_mj.tasks.protocol.TaskProtocol`:
+            sets the simulator's collision rule and human clock; None leaves them as they
+            are.
+
+    Attributes:
+        protocol: The protocol given (None if none was).
 
     Raises:
-        InvalidArgumentError: An unknown reward or term, or a bad number.
+        InvalidArgumentError: An unknown reward, term or protocol, a bad number, or a
+            simulator that cannot follow the protocol.
     """
 
     def __init__(
@@ -111,8 +121,12 @@ class TaskStep:
         reward_weights: Mapping[str, float] | None = None,
         success_distance: float = SUCCESS_DISTANCE,
         max_steps: int | None = None,
+        protocol: str | TaskProtocol | None = None,
     ) -> None:
         self.sim = sim
+        self.protocol = None if protocol is None else get_protocol(protocol)
+        if self.protocol is not None and sim is not None:
+            self.protocol.configure(sim)
         self.reward_fn = get_reward(reward)
         self.weights = self._check_weights(reward_weights)
         ok = isinstance(success_distance, numbers.Real) and math.isfinite(success_distance)

@@ -90,3 +90,13 @@ def test_bad_arguments_name_what_is_valid():
         dmenv.load("walk")
     with pytest.raises(InvalidArgumentError, match="max_steps"):
         dmenv.load("graph", max_steps=0, **BLIND)
+
+
+def test_protocol_option_reaches_the_task_step():
+    env = dmenv.load("ego", seed=0, protocol="ha3d", **BLIND)
+    env.reset()
+    assert env.core.sim.collision_rule.check == "state"
+    assert env.core.sim.human_clock.kind == "ha3d"
+    step = env.step(np.int64(EgoAction.FORWARD))
+    assert "collision" in env.info and step.reward is not None
+    env.close()

@@ -19,6 +19,7 @@ from gymnasium.utils.env_checker import check_env  # noqa: E402
 from havln_mj.errors import (  # noqa: E402
     InvalidActionError,
     InvalidArgumentError,
+    MissingDataError,
     NotInitializedError,
 )
 from havln_mj.gym import ENV_IDS, EgoEnv, GraphEnv  # noqa: E402 - registers the ids
@@ -267,3 +268,40 @@ def test_simulator_core_does_not_import_gymnasium():
         "assert 'gymnasium' not in sys.modules, 'core imported gymnasium'\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_protocol_option_sets_the_simulators_rules():
+    env = gym.make("HAVLN-Graph-v0", protocol="ha3d", **BLIND)
+    env.reset(seed=0)
+    sim = env.unwrapped.core.sim
+    assert sim.collision_rule.check == "state" and sim.human_clock.kind == "ha3d"
+    frame = sim.human_clock_frame
+    _, _, _, _, info = env.step(1)
+    assert sim.human_clock_frame == sim.human_clock.after_action(frame)  # one action: +32
+    assert isinstance(info["collision"], bool)
+    env.close()
+    strict = GraphEnv(**BLIND)
+    strict.reset(seed=0)
+    assert strict.core.sim.collision_rule.check == "action"
+    strict.close()
+    with pytest.raises(InvalidArgumentError, match="protocol"):
+        GraphEnv(protocol="lenient", **BLIND)
+
+
+def test_real_scans_need_their_people(shared_data, monkeypatch):
+    monkeypatch.delenv("HAVLN_HA3D_PLACEMENTS", raising=False)
+    where = {
+        "dataset": shared_data / "r2r" / "R2R_val_seen.json",
+        "connectivity_dir": shared_data / "mp3d_connectivity",
+        "scenes": ["17DRP5sb8fy"],
+        **BLIND,
+    }
+    env = GraphEnv(**where)
+    with pytest.raises(MissingDataError, match="human_placements"):
+        env.reset(seed=0)
+    env.close()
+    placements = shared_data / "ha3d" / "human_placements.json"
+    env = GraphEnv(human_placements=placements, **where)
+    env.reset(seed=0)
+    assert len(env.core.sim.crowd("17DRP5sb8fy")) > 0
+    env.close()

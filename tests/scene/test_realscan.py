@@ -96,7 +96,9 @@ def test_graph_proxy_when_only_the_graph_is_there(tmp_path, shared_data):
     assert scan.boxes is not None and scan.meta["unwalkable_edges"] == 0
     out = tmp_path / "run"
     args = "--scene 17DRP5sb8fy --episodes 1 --width 48 --height 36 --fps 2"
-    assert run_main([*args.split(), "--connectivity-dir", str(conn), "--out", str(out)]) == 0
+    placements = shared_data / "ha3d" / "human_placements.json"
+    flags = ["--connectivity-dir", str(conn), "--human-placements", str(placements)]
+    assert run_main([*args.split(), *flags, "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["scene_kind"] == "graph proxy" and "graph proxy" in summary["description"]
     assert (out / "egocentric.mp4").stat().st_size > 0 and (out / "topdown.png").is_file()

@@ -229,7 +229,7 @@ def test_egocentric_expert_goes_on_when_no_route_avoids_people(graph):
     expert = HumanAwareExpert("local", action_space="ego")
     tr = run_expert(sim, _episode(graph, start, goal), expert)
     assert tr.stopped and tr.final_viewpoint == goal
-    assert expert.waits > 0 and tr.collisions > 0
+    assert expert.walked_through > 0 and tr.collisions > 0
 
 
 # ---------------------------------------------------------------------- random walk and rewards

@@ -12,6 +12,7 @@ from havln_mj.tasks.rewards import SUCCESS_DISTANCE  # R2R and HA-R2R: success w
 
 CriticalMode = Literal["paper", "ha3d", "none"]
 CRITICAL_MODES: tuple[str, ...] = ("paper", "ha3d", "none")
+COUNT_MODES: tuple[str, ...] = ("step", "viewpoint")
 
 DTW_THRESHOLD = 3.0  # metres; d_th of nDTW (Ilharco et al. 2019)
 COLLISION_RADIUS = COLLISION_DISTANCE  # metres; HA-VLN's threshold (HA3D: distance <= 1)
@@ -21,10 +22,12 @@ COLLISION_RADIUS = COLLISION_DISTANCE  # metres; HA-VLN's threshold (HA3D: dista
 class MetricConfig:
     """How episodes are scored.
 
-    Collisions are counted per trajectory step: a step (one low-level action, turns included,
-    and the start state) with at least one person within the collision radius adds 1, as
-    HA3D's ``isCrushed`` flag does. The count is then reduced by the number of *unavoidable*
-    people of the episode, chosen by ``critical``:
+    Collisions are counted per trajectory step (``count="step"``): a step (one low-level
+    action, turns included, and the start state) with at least one person within the
+    collision radius adds 1, as HA3D's ``isCrushed`` flag does; ``count="viewpoint"`` counts
+    each visit to a viewpoint (consecutive steps on it) once, however long the agent turns
+    there. The count is then reduced by the number of *unavoidable* people of the episode,
+    chosen by ``critical``:
 
     * ``"paper"`` (default): people standing within ``collision_radius`` of a critical node
       of the reference path. Critical nodes are the path's crux points, the nodes the agent
@@ -45,6 +48,7 @@ class MetricConfig:
         cr_adjusted: CR counts episodes whose adjusted count is >= 1 (HA-VLN 2.0:
             ``CR_ep = min(TCR_ep, 1)``); False counts episodes with >= 1 raw collision, as
             HA3D's ``hits_rate`` does.
+        count: ``"step"`` (HA3D) or ``"viewpoint"`` (each visit to a viewpoint once).
     """
 
     success_distance: float = SUCCESS_DISTANCE
@@ -53,6 +57,7 @@ class MetricConfig:
     critical: CriticalMode = "paper"
     clip: bool = True
     cr_adjusted: bool = True
+    count: str = "step"
 
     def __post_init__(self) -> None:
         for name in ("success_distance", "dtw_threshold", "collision_radius"):
@@ -65,6 +70,8 @@ class MetricConfig:
             raise InvalidArgumentError(
                 f"critical must be one of {CRITICAL_MODES}, got {self.critical!r}"
             )
+        if self.count not in COUNT_MODES:
+            raise InvalidArgumentError(f"count must be one of {COUNT_MODES}, got {self.count!r}")
 
     @classmethod
     def ha3d(cls) -> MetricConfig:

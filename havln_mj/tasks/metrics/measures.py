@@ -17,7 +17,7 @@ The default set, with the standard metric each one gives when averaged over epis
 ``ndtw``                   nDTW against the reference path
 ``sdtw``                   SDTW = SR * nDTW
 ``steps``                  number of steps taken (records after the start)
-``collisions``             raw per-step collision count
+``collisions``             raw collision count (per step or per visit)
 ``unavoidable``            people whose collisions are discounted
 ``tcr``                    TCR: adjusted collision count
 ``cr``                     CR: adjusted (or raw) count >= 1
@@ -31,7 +31,7 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from itertools import pairwise
+from itertools import groupby, pairwise
 from typing import ClassVar
 
 import numpy as np
@@ -223,16 +223,22 @@ class Steps(Measure):
 
 
 class Collisions(Measure):
-    """Raw collision count: the number of steps, start included, flagged as collided.
+    """Raw collision count: the steps, start included, flagged as collided.
 
-    As in HA3D, lingering or turning next to a person adds one per step.
+    With ``count="step"`` (HA3D), lingering or turning next to a person adds one per step;
+    with ``count="viewpoint"``, each visit to a viewpoint (a run of consecutive steps on
+    it) adds at most one.
     """
 
     name = "collisions"
 
     def compute(self, ctx: EpisodeContext) -> float:
-        """Returns the number of collided steps."""
-        return float(sum(step.collided for step in ctx.episode.trajectory))
+        """Returns the number of collided steps (or visits)."""
+        steps = ctx.episode.trajectory
+        if ctx.config.count == "step":
+            return float(sum(step.collided for step in steps))
+        visits = [any(s.collided for s in run) for _, run in groupby(steps, lambda s: s.viewpoint)]
+        return float(sum(visits))
 
 
 class Unavoidable(Measure):
