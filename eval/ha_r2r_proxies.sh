@@ -13,8 +13,10 @@ WHERE=(--set data_dir="$D" --set connectivity_dir="$D/mp3d_connectivity"
 EVAL=(--dataset HA_val_seen --split val_seen --data-dir "$D" --threads "$THREADS"
       --connectivity-dir "$D/mp3d_connectivity" --human-placements "$D/ha3d/human_placements.json")
 for agent in cm dt; do
+    resume=()
+    [[ -f "$RUNS/$agent/checkpoint.pt" ]] && resume=(--resume)  # an interrupted run goes on
     python -m havln_mj.agents.train --config "vln_${agent}_r2r" --out "$RUNS/$agent" \
-        --threads "$THREADS" --resume --no-progress "${WHERE[@]}"
+        --threads "$THREADS" "${resume[@]}" --no-progress "${WHERE[@]}"
     python -m havln_mj.eval "${EVAL[@]}" --agent "$RUNS/$agent/best.pt" --out "$RUNS/eval/$agent"
 done
 for agent in shortest oracle random; do

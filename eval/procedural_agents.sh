@@ -14,10 +14,11 @@ THREADS=${THREADS:-1}
 
 train() {  # name config overrides...
     local name=$1 config=$2; shift 2
-    local sets=()
+    local sets=() resume=()
     for kv in "$@"; do sets+=(--set "$kv"); done
+    [[ -f "$RUNS/$name/checkpoint.pt" ]] && resume=(--resume)  # an interrupted run goes on
     python -m havln_mj.agents.train --config "$config" --out "$RUNS/$name" --threads "$THREADS" \
-        --resume --no-progress "${sets[@]}"
+        "${resume[@]}" --no-progress "${sets[@]}"
 }
 
 evaluate() {  # name agent

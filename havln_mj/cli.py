@@ -4,10 +4,11 @@
 
 Each scene is built in its own process (scan folder, collision geometry, compiled world), so
 later runs load from the cache at once. Run ``havln_mj scenes build --help`` for options.
-``havln_mj dataset build --scenes <ids...> --split <name>`` writes an HA-R2R style split of
-generated episodes (see :mod:`havln_mj.tasks.procedural`). ``havln_mj annotate --scene <id>``
-serves a local page to place people and save them as HA3D placements
-(see :mod:`havln_mj.annotator`).
+``havln_mj scenes export ID --out DIR`` writes a built world as MJCF with its meshes and
+textures (see :mod:`havln_mj.sim.export`). ``havln_mj dataset build --scenes <ids...> --split
+<name>`` writes an HA-R2R style split of generated episodes (see
+:mod:`havln_mj.tasks.procedural`). ``havln_mj annotate --scene <id>`` serves a local page to
+place people and save them as HA3D placements (see :mod:`havln_mj.annotator`).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from tqdm import tqdm
 from havln_mj import argchecks
 from havln_mj.annotator import command as annotate_command
 from havln_mj.errors import HavlnError, InvalidArgumentError
+from havln_mj.humans.mujoco_people import DRAW_STYLES
 from havln_mj.scene.realscan import CONNECTIVITY_ENV, resolve_connectivity_dir
 from havln_mj.scene.scan import known_scene_ids
 from havln_mj.sim.prebuild import build_scene
@@ -103,6 +105,75 @@ def scenes_build(args: argparse.Namespace) -> int:
     return 1 if failures else 0
 
 
+def scenes_export(args: argparse.Namespace) -> int:
+    """Exports one scene as MJCF; prints what was written."""
+    from havln_mj.sim.export import export_scene
+
+    done = export_scene(
+        args.id,
+        args.out,
+        time=args.time,
+        body=args.body,
+        seed=args.seed,
+        humans=not args.no_people,
+        together=args.together,
+        people_style=args.people_style,
+        viewpoint=args.viewpoint,
+        collision=args.collision,
+        solid_people=args.solid_people,
+        mp3d_dir=args.mp3d_dir,
+        connectivity_dir=args.connectivity_dir,
+        human_placements=args.human_placements,
+    )
+    print(
+        f"wrote {done.xml} ({done.ngeom} geoms, {done.people} people at t = {args.time:g} s, "
+        f"{done.meshes} meshes, {done.textures} textures); view it with "
+        f"python -m mujoco.viewer --mjcf={done.xml}"
+    )
+    return 0
+
+
+def _add_export_parser(scenes: argparse._SubParsersAction) -> None:
+    export = scenes.add_parser(
+        "export", help="write a built world (building, people, robot) as MJCF with its assets"
+    )
+    export.add_argument("id", help="scene id: proc-<seed>, a Matterport scan id, a scan folder")
+    export.add_argument("--out", type=Path, required=True, help="output folder")
+    export.add_argument(
+        "--time", type=float, default=0.0, help="simulated seconds at which people are posed"
+    )
+    export.add_argument(
+        "--body", choices=("point", "go1"), default="point", help="the agent: camera rig or GO1"
+    )
+    export.add_argument("--seed", type=int, default=0, help="simulator seed: which people")
+    export.add_argument("--no-people", action="store_true", help="leave the people out")
+    export.add_argument(
+        "--together", type=float, default=0.0, help="chance a placed person is joined by others"
+    )
+    export.add_argument(
+        "--people-style",
+        choices=DRAW_STYLES,
+        default="pieces",
+        help="how people are drawn: dressed rigid pieces, one skinned mesh, or capsules",
+    )
+    export.add_argument(
+        "--viewpoint", default=None, help="where the agent stands (default: the first one)"
+    )
+    export.add_argument(
+        "--collision", choices=COLLISION_MODES, default="auto", help="collision geometry"
+    )
+    export.add_argument(
+        "--solid-people", action="store_true", help="people's bodies collide (push a robot)"
+    )
+    export.add_argument("--mp3d-dir", type=Path, default=None, help="Matterport3D data root")
+    export.add_argument(
+        "--connectivity-dir", type=Path, default=None, help="folder of connectivity graphs"
+    )
+    export.add_argument(
+        "--human-placements", type=Path, default=None, help="HA3D human placement file"
+    )
+
+
 def dataset_build(args: argparse.Namespace) -> int:
     """Generates a split with a progress bar; prints the files and instruction lengths."""
     from havln_mj.tasks.procedural import build_split
@@ -126,6 +197,17 @@ def _build_problems(args: argparse.Namespace) -> list[str | None]:
         argchecks.in_range("--workers", args.workers, 1),
         argchecks.existing("--mp3d-dir", args.mp3d_dir),
         argchecks.existing("--connectivity-dir", args.connectivity_dir),
+    ]
+
+
+def _export_problems(args: argparse.Namespace) -> list[str | None]:
+    return [
+        argchecks.in_range("--time", args.time, 0.0, unit=" s"),
+        argchecks.in_range("--together", args.together, 0.0, 1.0),
+        argchecks.existing("--mp3d-dir", args.mp3d_dir),
+        argchecks.existing("--connectivity-dir", args.connectivity_dir),
+        argchecks.existing("--human-placements", args.human_placements, "file"),
+        argchecks.writable_folder("--out", args.out),
     ]
 
 
@@ -162,6 +244,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         default=2,
         help="parallel processes (default 2; at most one per scene and per CPU)",
     )
+    _add_export_parser(scenes)
     dataset = sub.add_parser("dataset", help="episode datasets").add_subparsers(
         dest="command", required=True
     )
@@ -192,12 +275,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         except HavlnError as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 2
-    problems = _dataset_problems(args) if args.group == "dataset" else _build_problems(args)
+    if args.group == "dataset":
+        problems = _dataset_problems(args)
+    elif args.command == "export":
+        problems = _export_problems(args)
+    else:
+        problems = _build_problems(args)
     for problem in problems:
         if problem:
             parser.error(problem)
     try:
-        return dataset_build(args) if args.group == "dataset" else scenes_build(args)
+        if args.group == "dataset":
+            return dataset_build(args)
+        return scenes_export(args) if args.command == "export" else scenes_build(args)
     except HavlnError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2

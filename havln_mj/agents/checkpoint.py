@@ -3,11 +3,14 @@
 A checkpoint holds the agent kind (``vln_cm`` / ``vln_dt``), the model's configuration and
 weights, the instruction vocabulary, the view encoder (configuration and weights) with the
 feature settings, and for resuming the training configuration, iteration, optimiser state,
-generator states and loss history. Files are written atomically.
+generator states and loss history (a released checkpoint, :meth:`AgentBundle.released`, keeps
+the configuration, iteration and history only). Files are written atomically. The trained
+checkpoints shipped in ``agents/`` load by name (:func:`resolve_checkpoint`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import pickle
 from dataclasses import asdict, dataclass, field
@@ -21,10 +24,50 @@ from havln_mj.agents.featurize import FeatureSpec
 from havln_mj.agents.vision import ViewEncoder
 from havln_mj.cache import atomic_write_bytes
 from havln_mj.errors import MalformedDataError, MissingDataError
+from havln_mj.paths import project_home
 from havln_mj.tasks.vocab import Vocabulary
 
 FORMAT = "havln_mj-agent-1"
 AGENTS = ("vln_cm", "vln_dt")
+# What a released checkpoint keeps of the training state: enough to tell how it was made.
+RELEASE_STATE = ("config", "iteration", "history", "best")
+
+
+def shipped_checkpoints() -> list[Path]:
+    """The trained checkpoints shipped in the project's ``agents/`` folder."""
+    try:
+        return sorted((project_home() / "agents").glob("*.pt"))
+    except MissingDataError:
+        return []
+
+
+def resolve_checkpoint(path: str | Path) -> Path:
+    """The checkpoint file ``path`` names.
+
+    A path that exists is taken as it is; a relative one that does not is looked up in the
+    project home (``agents/vln_cm_small.pt``) and in its ``agents/`` folder
+    (``vln_cm_small.pt``), so the shipped checkpoints load from any working directory.
+
+    Raises:
+        MissingDataError: No such file; the message lists the shipped checkpoints.
+    """
+    given = Path(path).expanduser()
+    if given.is_file():
+        return given
+    if not given.is_absolute():
+        try:
+            home = project_home()
+        except MissingDataError:
+            home = None
+        for candidate in () if home is None else (home / given, home / "agents" / given):
+            if candidate.is_file():
+                return candidate
+    shipped = ", ".join(f"agents/{p.name}" for p in shipped_checkpoints()) or "none found"
+    raise MissingDataError(
+        f"agent checkpoint {given} does not exist; train one with `python -m "
+        f"havln_mj.agents.train --config vln_cm_small --out runs/cm` (then runs/cm/best.pt), "
+        f"or use a shipped one: {shipped}"
+    )
 
 
 def build_model(agent: str, config: dict) -> nn.Module:
@@ -66,6 +109,15 @@ class AgentBundle:
     features: FeatureSpec
     state: dict[str, Any] = field(default_factory=dict)
 
+    def released(self) -> AgentBundle:
+        """This agent without what only resuming needs (optimiser and generator states).
+
+        What stays is what evaluating needs, plus the training configuration, iteration,
+        history and best score; the optimiser's two moments per weight go.
+        """
+        state = {k: self.state[k] for k in RELEASE_STATE if k in self.state}
+        return dataclasses.replace(self, state=state)
+
     def save(self, path: str | Path) -> None:
         """Writes the checkpoint atomically."""
         spec = asdict(self.features)
@@ -92,16 +144,13 @@ class AgentBundle:
     def load(cls, path: str | Path) -> AgentBundle:
         """Reads a checkpoint.
 
+        ``path`` is resolved by :func:`resolve_checkpoint` (shipped checkpoints by name).
+
         Raises:
             MissingDataError: No such file.
             MalformedDataError: Not an agent checkpoint, or a damaged one.
         """
-        path = Path(path).expanduser()
-        if not path.is_file():
-            raise MissingDataError(
-                f"agent checkpoint {path} does not exist; train one with "
-                "`python -m havln_mj.agents.train --agent vln_cm --config ...`"
-            )
+        path = resolve_checkpoint(path)
         try:
             blob = torch.load(path, map_location="cpu", weights_only=False)
         except (RuntimeError, EOFError, OSError, ValueError, pickle.UnpicklingError) as exc:

@@ -3,7 +3,7 @@
 ``python -m havln_mj.agents.featurize --scenes proc-0 proc-1 ... [--encoder FILE]`` renders the
 36 × slots views of every viewpoint (:mod:`havln_mj.agents.views`), encodes them and caches
 the result per scan (:mod:`havln_mj.agents.features`). Without ``--encoder`` a
-:class:`~havln_mj.agents.vision.ViewEncoder` is first trained from scratch on renders of the
+:class:`~.ViewEncoder` is first trained from scratch on renders of the
 first scenes, on what the simulator knows about each view: the room type, how much of it
 shows people, whether FORWARD would move, and a coarse depth map.
 """
@@ -38,7 +38,7 @@ class FeatureSpec:
 
     Attributes:
         view: How views are rendered.
-        encoder: :class:`~havln_mj.agents.vision.ViewEncoder` arguments.
+        encoder: :class:`~.ViewEncoder` arguments.
         pretrain_scenes: How many of the first scenes the encoder is pretrained on.
         pretrain_viewpoints: Viewpoints drawn per pretraining scene.
         pretrain_epochs: Pretraining epochs.

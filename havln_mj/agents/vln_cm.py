@@ -194,16 +194,17 @@ class CMPolicy:
 
     def __init__(self, model: VLNCM) -> None:
         self.model = model.eval()
+        self._device = next(model.parameters()).device
         self._ctx: tuple | None = None
 
     @torch.no_grad()
     def reset(self, instruction: np.ndarray) -> None:
         """Starts an episode with ``(L,)`` token ids."""
-        ids = torch.as_tensor(np.asarray(instruction, np.int64)).unsqueeze(0)
-        ctx, pad, state = self.model.encode(ids)
+        ids = torch.as_tensor(np.asarray(instruction, np.int64), device=self._device)
+        ctx, pad, state = self.model.encode(ids.unsqueeze(0))
         self._ctx = (ctx, pad)
         self._state = state
-        self._prev = torch.tensor([START])
+        self._prev = torch.tensor([START], device=self._device)
 
     @torch.no_grad()
     def act(
@@ -222,15 +223,16 @@ class CMPolicy:
         """
         if self._ctx is None:
             raise InvalidArgumentError("CMPolicy.act called before reset()")
+        dev = self._device
         logits, self._state, _ = self.model.step(
-            torch.as_tensor(obs, dtype=torch.float32).unsqueeze(0),
+            torch.as_tensor(obs, dtype=torch.float32, device=dev).unsqueeze(0),
             self._prev,
             self._state,
             *self._ctx,
-            torch.as_tensor(action_mask, dtype=torch.bool).unsqueeze(0),
+            torch.as_tensor(action_mask, dtype=torch.bool, device=dev).unsqueeze(0),
         )
-        action = choose(logits[0], greedy, rng)
-        self._prev = torch.tensor([action])
+        action = choose(logits[0].cpu(), greedy, rng)
+        self._prev = torch.tensor([action], device=dev)
         return action
 
 

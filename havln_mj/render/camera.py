@@ -338,18 +338,30 @@ class Camera:
         self._handle.make_current()
         mujoco.mjr_uploadMesh(self._model, self._ctx, int(mesh_id))
 
-    def render_geom_ids(self, data: mujoco.MjData) -> np.ndarray:
+    def render_geom_ids(
+        self, data: mujoco.MjData, geom_groups: Sequence[int] | None = None
+    ) -> np.ndarray:
         """Which model geom each pixel shows: ``(H, W)`` ``int32``, −1 where none.
 
         A second pass with MuJoCo's segmentation colouring (each drawn geom in a unique flat
         colour), decoded back to geom ids. Same preconditions as :meth:`render`.
+
+        Args:
+            data: State to render.
+            geom_groups: Geom groups this pass draws (0–5); None draws the camera's own.
         """
         if self._closed or self._ctx is None or self._handle is None:
             raise ClosedError("render_geom_ids() called on a closed Camera")
+        option = self._option
+        chosen = _check_groups(geom_groups)
+        if chosen is not None:
+            option = mujoco.MjvOption()
+            option.geomgroup[:] = 0
+            option.geomgroup[chosen] = 1
         self._handle.make_current()
         self._model.cam_fovy[self._cam_id] = self._vfov
         mujoco.mjv_updateScene(
-            self._model, data, self._option, None, self._mjv_cam, _CATMASK, self._scene
+            self._model, data, option, None, self._mjv_cam, _CATMASK, self._scene
         )
         flags = self._scene.flags
         segment, idcolor = (

@@ -1,16 +1,23 @@
-"""Visual meshes of scans: writing box geometry as glb, and reading glb/obj split per material.
+"""Visual meshes of scans: writing parts as glb, and reading glb/obj split into parts.
 
 MuJoCo colours or textures a mesh geom as a whole, so a building's mesh is handled as parts,
 one per material: vertices, triangles, an rgba colour and, for textured materials, one UV per
-vertex and the texture image.
+vertex and the texture image. A ``.glb`` written by :func:`write_glb` marks itself (glTF
+scene extras ``{"havln_mj": {"parts": "node"}}``) so that it reads back one part per glTF
+node, as written: procedural houses keep each object's pieces apart (for instance
+segmentation) while sharing materials and images between them. Other files are split per
+material.
 
 Conventions of :class:`MeshPart`:
 
 - ``vertices`` are in the z-up world frame (Matterport's frame: metres, +z up).
 - ``uv`` follows the OBJ convention: ``(0, 0)`` is the bottom-left corner of the image and
   ``v`` grows upwards. trimesh already converts glTF's top-left origin to this on load.
-- ``texture`` is an H×W×3 ``uint8`` RGB image stored top row first (as PIL and image files
-  store it). :func:`havln_mj.sim.visual.add_visual_parts` converts to MuJoCo's convention.
+- ``texture`` is an H×W×3 ``uint8`` RGB (or H×W×4 RGBA, for blended overlays) image stored
+  top row first (as PIL and image files store it). :func:`havln_mj.sim.visual.add_visual_parts`
+  converts to MuJoCo's convention.
+- ``shine`` and ``emission`` travel through glTF as ``1 − roughnessFactor`` and
+  ``emissiveFactor``; an alpha below 1 in ``rgba`` as ``alphaMode: BLEND``.
 
 Up axis: trimesh applies no axis conversion when reading glTF, so a ``.glb`` comes back in the
 frame its vertices were written in. The meshes this project writes and the Matterport3D
@@ -22,6 +29,8 @@ takes the file's +y (up) to +z.
 
 from __future__ import annotations
 
+import hashlib
+import io
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -60,8 +69,10 @@ class MeshPart:
         rgba: The material's colour, used when the part has no texture.
         uv: (V, 2) float32 texture coordinates, one per vertex (OBJ convention: origin at the
             image's bottom left), or None for an untextured part.
-        texture: H×W×3 uint8 RGB image, top row first, or None. Parts sharing one material
-            image share one array.
+        texture: H×W×3 uint8 RGB (or H×W×4 RGBA) image, top row first, or None. Parts
+            sharing one material image share one array.
+        shine: Gloss in [0, 1] (0: matt).
+        emission: Self-lit share in [0, 1] (0: lit only by the scene's lights).
     """
 
     name: str
@@ -69,7 +80,9 @@ class MeshPart:
     faces: np.ndarray  # (F, 3) int32
     rgba: tuple[float, float, float, float]
     uv: np.ndarray | None = None  # (V, 2) float32
-    texture: np.ndarray | None = None  # (H, W, 3) uint8
+    texture: np.ndarray | None = None  # (H, W, 3 or 4) uint8
+    shine: float = 0.0
+    emission: float = 0.0
 
     @property
     def textured(self) -> bool:
@@ -101,20 +114,65 @@ def boxes_to_parts(boxes: BoxSet) -> list[MeshPart]:
     return parts
 
 
+def _pil_image(texture: np.ndarray) -> Any:
+    """A PIL image of a texture: JPEG-coded when opaque (far quicker to write than PNG)."""
+    from PIL import Image
+
+    image = Image.fromarray(texture)
+    if texture.shape[2] == 4:
+        return image
+    buffer = io.BytesIO()
+    image.save(buffer, format="JPEG", quality=92)
+    return Image.open(buffer)
+
+
+def _glb_material(part: MeshPart, name: str, images: dict[int, Any]) -> Any:
+    import trimesh  # a large import: only when meshes are written
+
+    colour = np.round(np.array(part.rgba) * 255).astype(np.uint8)
+    extra: dict[str, Any] = {}
+    if part.textured:
+        assert part.texture is not None
+        image = images.get(id(part.texture))
+        if image is None:
+            image = images[id(part.texture)] = _pil_image(part.texture)
+        extra["baseColorTexture"] = image
+    if part.rgba[3] < 1.0 or (part.texture is not None and part.texture.shape[2] == 4):
+        extra["alphaMode"] = "BLEND"
+    if part.emission > 0.0:
+        extra["emissiveFactor"] = [part.emission] * 3
+    return trimesh.visual.material.PBRMaterial(
+        name=name,
+        baseColorFactor=colour,
+        metallicFactor=0.0,
+        roughnessFactor=1.0 - part.shine,
+        **extra,
+    )
+
+
 def write_glb(parts: list[MeshPart], path: Path) -> None:
-    """Writes mesh parts as a binary glTF, one mesh and one PBR material per part."""
+    """Writes mesh parts as a binary glTF: one node per part, named after it.
+
+    Parts with the same look (texture image, colour, shine, emission) share one glTF
+    material, and every image is stored once: opaque ones as JPEG, with alpha as PNG. The
+    file reads back into the same parts (up to the JPEG coding of the images).
+    """
     import trimesh  # a large import: only when meshes are read or written
 
     scene = trimesh.Scene()
+    scene.metadata["havln_mj"] = {"parts": "node"}
+    images: dict[int, Any] = {}  # id(texture array) -> PIL image
+    materials: dict[tuple, Any] = {}
     for part in parts:
-        colour = np.round(np.array(part.rgba) * 255).astype(np.uint8)
-        material = trimesh.visual.material.PBRMaterial(
-            name=part.name, baseColorFactor=colour, metallicFactor=0.0, roughnessFactor=0.9
-        )
+        look = (id(part.texture) if part.textured else 0, part.rgba, part.shine, part.emission)
+        material = materials.get(look)
+        if material is None:
+            material = materials[look] = _glb_material(part, f"m{len(materials)}", images)
+        uv = part.uv if part.textured else None
         mesh = trimesh.Trimesh(
             part.vertices,
             part.faces,
-            visual=trimesh.visual.TextureVisuals(material=material),
+            visual=trimesh.visual.TextureVisuals(uv=uv, material=material),
             process=False,
         )
         scene.add_geometry(mesh, geom_name=part.name, node_name=part.name)
@@ -141,6 +199,16 @@ def _rgba_of(geom: trimesh.Trimesh) -> tuple[float, float, float, float]:
     return tuple(float(v) for v in c[:4])
 
 
+def _finish_of(geom: trimesh.Trimesh) -> tuple[float, float]:
+    """(shine, emission) of a glTF material (both 0 for other materials)."""
+    material = getattr(geom.visual, "material", None)
+    roughness = getattr(material, "roughnessFactor", None)
+    emissive = getattr(material, "emissiveFactor", None)
+    shine = 0.0 if roughness is None else float(np.clip(1.0 - roughness, 0.0, 1.0))
+    emission = 0.0 if emissive is None else float(np.clip(np.max(emissive), 0.0, 1.0))
+    return shine, emission
+
+
 def _image_of(geom: trimesh.Trimesh) -> Any:
     """The material's colour image (a PIL image) when the geometry has one and UVs."""
     visual = geom.visual
@@ -154,20 +222,26 @@ def _image_of(geom: trimesh.Trimesh) -> Any:
 
 
 def _image_array(image: Any, path: Path, max_size: int | None) -> np.ndarray:
-    """A PIL image as an H×W×3 uint8 RGB array (top row first), at most ``max_size`` wide/high."""
+    """A PIL image as an H×W×3 uint8 RGB (or H×W×4 RGBA) array, top row first.
+
+    Images larger than ``max_size`` are shrunk by an integer factor to fit.
+    """
     try:
         size = max(image.size)
         if max_size is not None and size > max_size:
             image = image.reduce(-(-size // max_size))
-        if getattr(image, "mode", "RGB") != "RGB":
-            image = image.convert("RGB")
+        mode = getattr(image, "mode", "RGB")
+        if mode not in ("RGB", "RGBA"):
+            image = image.convert("RGBA" if "A" in mode else "RGB")
         array = np.asarray(image, dtype=np.uint8)
     except Exception as exc:  # PIL raises many types for bad images
         raise CorruptMeshError(
             f"{path}: cannot read a texture image ({type(exc).__name__}: {exc})"
         ) from exc
-    if array.ndim != 3 or array.shape[2] != 3 or min(array.shape[:2]) < 1:
-        raise CorruptMeshError(f"{path}: texture image has shape {array.shape}, expected H×W×3")
+    if array.ndim != 3 or array.shape[2] not in (3, 4) or min(array.shape[:2]) < 1:
+        raise CorruptMeshError(
+            f"{path}: texture image has shape {array.shape}, expected H×W×3 or H×W×4"
+        )
     array.flags.writeable = False
     return array
 
@@ -175,10 +249,12 @@ def _image_array(image: Any, path: Path, max_size: int | None) -> np.ndarray:
 def load_mesh_parts(
     path: Path, *, up: str = "z", max_texture_size: int | None = None
 ) -> list[MeshPart]:
-    """Reads a ``.glb`` / ``.gltf`` / ``.obj`` mesh as world-space parts, one per material.
+    """Reads a ``.glb`` / ``.gltf`` / ``.obj`` mesh as world-space parts.
 
-    Textured materials (an OBJ ``map_Kd`` or a glTF base colour texture) give parts with
-    per-vertex UVs and the image as an array; reading images needs Pillow. Each image is
+    A file written by :func:`write_glb` gives one part per node, named after it; any other
+    file one part per material. Textured materials (an OBJ ``map_Kd`` or a glTF base colour
+    texture) give parts with per-vertex UVs and the image as an array; reading images needs
+    Pillow. Each image is
     converted once, however many pieces of the file use it.
 
     Args:
@@ -209,7 +285,9 @@ def load_mesh_parts(
         scene = trimesh.load(path, force="scene", process=False)
     except Exception as exc:  # trimesh raises many types for bad files
         raise CorruptMeshError(f"{path}: cannot read mesh ({type(exc).__name__}: {exc})") from exc
+    by_node = scene.metadata.get("havln_mj", {}).get("parts") == "node"
     images: dict[int, np.ndarray] = {}  # id(PIL image) -> array, so shared images convert once
+    same_image: dict[tuple, np.ndarray] = {}
     parts: dict[tuple[str, int], list] = {}
     for node in scene.graph.nodes_geometry:
         transform, geom_name = scene.graph[node]
@@ -220,7 +298,7 @@ def load_mesh_parts(
         if up == "y":
             verts = verts @ _Y_UP_TO_Z_UP.T
         material = getattr(geom.visual, "material", None)
-        name = getattr(material, "name", None) or geom_name
+        name = geom_name if by_node else getattr(material, "name", None) or geom_name
         image = _image_of(geom)
         uv = None
         texture = None
@@ -233,6 +311,9 @@ def load_mesh_parts(
             texture = images.get(id(image))
             if texture is None:
                 texture = images[id(image)] = _image_array(image, path, max_texture_size)
+                if by_node:  # glTF materials sharing an image each get their own PIL copy
+                    digest = (texture.shape, hashlib.blake2b(texture.data).digest())
+                    texture = images[id(image)] = same_image.setdefault(digest, texture)
         key = (name, id(texture) if texture is not None else 0)
         parts.setdefault(key, []).append((verts, np.asarray(geom.faces), uv, texture, geom))
     out = []
@@ -243,8 +324,14 @@ def load_mesh_parts(
         texture = chunks[0][3]
         uv = None if texture is None else np.concatenate([c[2] for c in chunks])
         rgba = _rgba_of(chunks[0][4])
+        if texture is not None and not isinstance(
+            chunks[0][4].visual.material, trimesh.visual.material.PBRMaterial
+        ):
+            rgba = (1.0, 1.0, 1.0, rgba[3])  # an OBJ's Kd does not tint its map_Kd here
         verts = verts.astype(float, copy=False)
-        out.append(MeshPart(name, verts, faces.astype(np.int32, copy=False), rgba, uv, texture))
+        shine, emission = _finish_of(chunks[0][4])
+        faces = faces.astype(np.int32, copy=False)
+        out.append(MeshPart(name, verts, faces, rgba, uv, texture, shine, emission))
     if not out:
         raise CorruptMeshError(f"{path}: the mesh holds no triangles")
     for part in out:
@@ -253,6 +340,35 @@ def load_mesh_parts(
         if part.uv is not None and not np.all(np.isfinite(part.uv)):
             raise CorruptMeshError(f"{path}: part {part.name!r} has non-finite UVs")
     return out
+
+
+def merge_parts(parts: list[MeshPart], name: str) -> MeshPart:
+    """Parts that look alike (one texture, colour, shine, emission) as one part."""
+    first = parts[0]
+    offsets = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
+    return MeshPart(
+        name,
+        np.concatenate([p.vertices for p in parts]),
+        np.concatenate([p.faces + o for p, o in zip(parts, offsets, strict=True)]).astype(np.int32),
+        first.rgba,
+        None if first.uv is None else np.concatenate([p.uv for p in parts]),
+        first.texture,
+        first.shine,
+        first.emission,
+    )
+
+
+def merge_by_look(parts: list[MeshPart]) -> list[MeshPart]:
+    """One part per distinct look (texture image, colour, shine, emission), in first order.
+
+    A renderer pays per drawn geom, so a building is drawn fastest as few large parts; a
+    merged part is named after its first part's material (the text after ``":"``).
+    """
+    groups: dict[tuple, list[MeshPart]] = {}
+    for part in parts:
+        look = (id(part.texture) if part.textured else 0, part.rgba, part.shine, part.emission)
+        groups.setdefault(look, []).append(part)
+    return [merge_parts(group, group[0].name.split(":", 1)[-1]) for group in groups.values()]
 
 
 def parts_to_trimesh(parts: list[MeshPart]) -> trimesh.Trimesh:

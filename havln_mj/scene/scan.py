@@ -205,8 +205,9 @@ def _build_procedural(seed: int, target: Path) -> None:
 
 
 def _procedural_inputs(seed: int) -> dict[str, Any]:
-    """What a procedural house is derived from: its seed, the generator and the recipe."""
+    """What a procedural house is derived from: seed, generator, recipe, material library."""
     from havln_mj.scene.procedural.generate import GENERATOR_VERSION
+    from havln_mj.scene.procedural.materials import library_digest
     from havln_mj.scene.procedural.recipe import load_recipe
 
     return {
@@ -214,6 +215,7 @@ def _procedural_inputs(seed: int) -> dict[str, Any]:
         "seed": seed,
         "generator_version": GENERATOR_VERSION,
         "recipe": load_recipe().digest,
+        "materials": library_digest(),
     }
 
 

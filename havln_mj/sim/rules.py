@@ -144,3 +144,45 @@ class HumanClock:
     def seconds(self, frame: int) -> float:
         """The people's time at ``frame``."""
         return frame / self.fps
+
+
+def collision_rule_of(value: object, threshold: float) -> CollisionRule:
+    """The rule ``collision_rule=`` names (a name uses ``threshold``)."""
+    if isinstance(value, CollisionRule):
+        return value
+    named = {"strict": CollisionRule.strict, "ha3d": CollisionRule.ha3d}
+    if isinstance(value, str) and value in named:
+        return named[value](threshold)
+    raise InvalidArgumentError(
+        f"collision_rule {value!r} unknown; valid: 'strict', 'ha3d' or a CollisionRule"
+    )
+
+
+def human_clock_of(value: object) -> HumanClock:
+    """The clock ``human_clock=`` names."""
+    if isinstance(value, HumanClock):
+        return value
+    named = {"continuous": HumanClock.continuous, "ha3d": HumanClock.ha3d}
+    if isinstance(value, str) and value in named:
+        return named[value]()
+    raise InvalidArgumentError(
+        f"human_clock {value!r} unknown; valid: 'continuous', 'ha3d' or a HumanClock"
+    )
+
+
+def check_pair(rule: CollisionRule, clock: HumanClock, reactions: object | None) -> None:
+    """Refuses what HA3D's clock cannot do: people posed between states, or reacting.
+
+    Raises:
+        InvalidArgumentError: HA3D's clock with a per-action check, or with reactions.
+    """
+    if clock.kind == "ha3d" and rule.check != "state":
+        raise InvalidArgumentError(
+            "HA3D's human clock poses people only in states: it needs a per-state collision "
+            "check (collision_rule='ha3d'), not the continuous one"
+        )
+    if clock.kind == "ha3d" and reactions is not None:
+        raise InvalidArgumentError(
+            "HA3D's human clock needs people who do not react (reactions=False): on one "
+            "shared frame counter there is no track for them to react to"
+        )

@@ -40,11 +40,9 @@ from __future__ import annotations
 import math
 import numbers
 import time
-import zlib
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 
-import mujoco
 import numpy as np
 
 from havln_mj.errors import (
@@ -54,20 +52,23 @@ from havln_mj.errors import (
 from havln_mj.frames import TWO_PI
 from havln_mj.robot.point_body import DEFAULT_SPEED, DEFAULT_TURN_RATE
 from havln_mj.scene.navgraph import NavGraph
-from havln_mj.scene.scan import Scan
 from havln_mj.sim.actions import (
     check_graph_steps,
     check_robot_action,
-    parse_mixed,
     per_element,
 )
 from havln_mj.sim.batch import WAIT_S, Batch, Element, FilmCallback
 from havln_mj.sim.body import BODY_KINDS, ROBOT_ACTIONS, BodyKind, make_kind
-from havln_mj.sim.crowd import COLLISION_DISTANCE, NO_CROWD, Crowd
+from havln_mj.sim.crowd import COLLISION_DISTANCE, Crowd
+from havln_mj.sim.crowds import CrowdBook, CrowdFactory
 from havln_mj.sim.egocentric import DEFAULT_TURN, EgoAction, ego_to_mattersim, parse_ego_action
+from havln_mj.sim.extensions import SimulatorExtensions
 from havln_mj.sim.images import ImageFormat
 from havln_mj.sim.navigation import NavTable
-from havln_mj.sim.rules import CollisionRule, HumanClock
+from havln_mj.sim.rules import (
+    CollisionRule,
+    HumanClock,
+)
 from havln_mj.sim.scenes import SceneLibrary
 from havln_mj.sim.settings import SimulatorSettings, _check_angle
 from havln_mj.sim.state import SimState
@@ -76,10 +77,8 @@ __all__ = ["BODIES", "ROBOT_ACTIONS", "WAIT_S", "Simulator"]
 
 BODIES = BODY_KINDS
 
-CrowdFactory = Callable[[str, NavGraph, np.random.Generator], Crowd]
 
-
-class Simulator(SimulatorSettings):
+class Simulator(SimulatorSettings, SimulatorExtensions):
     """A batch of agents navigating scans, MatterSim-style.
 
     Example:
@@ -150,24 +149,12 @@ class Simulator(SimulatorSettings):
         ):
             if not (isinstance(value, numbers.Real) and math.isfinite(value) and value > 0):
                 raise InvalidArgumentError(f"{name} must be a positive number, got {value!r}")
-        if not (isinstance(humans, bool) or callable(humans)):
-            raise InvalidArgumentError(f"humans must be a bool or a crowd factory, got {humans!r}")
         if body not in BODIES:
             raise InvalidArgumentError(f"body {body!r} unknown; valid: {', '.join(BODIES)}")
-        if not (isinstance(together, numbers.Real) and 0.0 <= together <= 1.0):
-            raise InvalidArgumentError(f"together must be a chance in [0, 1], got {together!r}")
-        self._together = float(together)
-        self._reactions = _reactions(reactions)
-        if not isinstance(pinned_people, bool):
-            raise InvalidArgumentError(f"pinned_people takes a bool, got {pinned_people!r}")
-        if pinned_people and self._reactions is not None:
-            raise InvalidArgumentError("pinned_people=True needs people who do not react")
-        self._pinned = pinned_people
-        self._humans = humans
+        files = (human_placements, human_motions, smpl_model)
+        self._people = CrowdBook(humans, files, together, reactions, pinned_people)
         self._body_name = body
         self._legged_options = legged
-        self._human_files = (human_placements, human_motions, smpl_model)
-        self._crowds: CrowdFactory | None = None
         self._speed = float(speed)
         self._turn_rate = float(turn_rate)
         self._collision_distance = float(collision_distance)
@@ -178,7 +165,6 @@ class Simulator(SimulatorSettings):
         self._clock, self._frame = HumanClock.continuous(), 0
         self.set_rules(collision_rule, human_clock)
         self._rng = np.random.default_rng(self._cfg.seed)
-        self._crowd_of: dict[str, Crowd] = {}
         self._film: tuple[float, FilmCallback, tuple[str, ...]] | None = None
         self._timers = {"process": 0.0, "render": 0.0, "frames": 0}
 
@@ -200,20 +186,9 @@ class Simulator(SimulatorSettings):
         self._batch = Batch(cfg, self._kind, image_format, self._rule, self._timers)
         self._batch.clock, self._batch.frame = self._clock, self._frame
         self._batch.film = self._film
-        self._batch.reactions = self._reactions
+        self._batch.reactions = self._people.reactions
         self._rng = np.random.default_rng(cfg.seed)
-        self._crowd_of = {}
-        if self._humans is True:
-            from havln_mj.sim.people import HumanCrowds  # the humans package, only when used
-
-            self._crowds = HumanCrowds(
-                self._library.scan,
-                *self._human_files,
-                together=self._together,
-                mp3d_dir=cfg.dataset_path,
-            )
-        else:
-            self._crowds = self._humans or None
+        self._people.start(self._library.scan, cfg.seed, cfg.dataset_path)
         self._initialized = True
         if cfg.preloading:
             # Every graph of the folder; with rendering, worlds too, up to the cache size.
@@ -237,111 +212,11 @@ class Simulator(SimulatorSettings):
     def __exit__(self, *exc_info: object) -> None:
         self.close()
 
-    def set_film(
-        self, fps: float | None, callback: FilmCallback | None = None, cameras: Sequence[str] = ()
-    ) -> None:
-        """Draws frames during actions, at ``fps`` per simulated second (None stops).
-
-        ``callback(element, t, views, pose)`` receives the element's index, the simulated
-        time, the views of its body camera then of each of ``cameras`` (other cameras of the
-        body's world, e.g. the GO1's chase camera ``"go1/chase"``), with the people and the
-        body as they were at ``t``, and the body's pose ``(x, y, z, heading)`` then. The
-        first frame of an episode is its start state.
-
-        Raises:
-            InvalidArgumentError: ``fps`` is not positive, or no callback is given.
-        """
-        if fps is None:
-            self._film = None
-            if self._batch is not None:
-                self._batch.film = None
-            return
-        ok = isinstance(fps, numbers.Real) and math.isfinite(fps) and 0 < fps <= 1000
-        if not ok or callback is None:
-            raise InvalidArgumentError(
-                f"set_film takes fps in (0, 1000] and a callback, got {fps!r}"
-            )
-        self._film = (float(fps), callback, tuple(cameras))
-        if self._batch is not None:
-            self._batch.film = self._film
-
-    def set_rules(
-        self,
-        collision_rule: str | CollisionRule | None = None,
-        human_clock: str | HumanClock | None = None,
-        frame: int | None = None,
-    ) -> None:
-        """When and how collisions are measured, and which time people are posed at.
-
-        Takes effect from the next state on; may be called at any time.
-
-        Args:
-            collision_rule: ``"strict"``, ``"ha3d"`` (both with the simulator's
-                ``collision_distance``) or a :class:`~havln_mj.sim.rules.CollisionRule`
-                (None: keep the current one).
-            human_clock: ``"continuous"``, ``"ha3d"`` or a
-                :class:`~havln_mj.sim.rules.HumanClock` (None: keep the current one).
-            frame: Where HA3D's counter (re)starts (an evaluation resumed mid-way sets the
-                counter it stopped at, :attr:`human_clock_frame`); None keeps the counter
-                when the clock stays the same, else starts it at 0.
-
-        Raises:
-            InvalidArgumentError: An unknown rule, clock or frame; HA3D's clock with a
-                per-action collision check, or with people who react (HA3D's poses people
-                only in states, and its people do not react).
-        """
-        rule = (
-            self._rule
-            if collision_rule is None
-            else _collision_rule(collision_rule, self._collision_distance)
-        )
-        clock = self._clock if human_clock is None else _human_clock(human_clock)
-        _check_pair(rule, clock, self._reactions)
-        if frame is None:
-            frame = self.human_clock_frame if clock == self._clock else 0
-        bad = isinstance(frame, bool) or not isinstance(frame, numbers.Integral)
-        if bad or not 0 <= frame < clock.frames:
-            raise InvalidArgumentError(
-                f"human clock frame must be an integer in [0, {clock.frames}), got {frame!r}"
-            )
-        self._rule, self._clock, self._frame = rule, clock, int(frame)
-        if self._batch is not None:
-            self._batch.rule, self._batch.clock, self._batch.frame = rule, clock, self._frame
-
-    @property
-    def collision_rule(self) -> CollisionRule:
-        """The collision rule in use."""
-        return self._rule
-
-    @property
-    def human_clock(self) -> HumanClock:
-        """The people's clock in use."""
-        return self._clock
-
-    @property
-    def human_clock_frame(self) -> int:
-        """HA3D's shared frame counter now (0 with the continuous clock)."""
-        return self._batch.frame if self._batch is not None else self._frame
-
-    # ------------------------------------------------------------------ episodes
-
     def _per_element(self, name: str, values: object) -> list:
         return per_element(name, values, self._cfg.batch_size)
 
     def _crowd(self, table: NavTable) -> Crowd:
-        crowd = self._crowd_of.get(table.scan_id)
-        if crowd is None:
-            crowd = NO_CROWD
-            if self._crowds is not None:
-                # Each scan's people depend on the seed and the scan, not on visiting order.
-                rng = np.random.default_rng([self._cfg.seed, zlib.crc32(table.scan_id.encode())])
-                crowd = self._crowds(table.scan_id, table.graph, rng)
-                if self._pinned and len(crowd):
-                    from havln_mj.sim.people import PinnedCrowd  # the humans package, when used
-
-                    crowd = PinnedCrowd(crowd)
-            self._crowd_of[table.scan_id] = crowd
-        return crowd
+        return self._people.crowd(table.scan_id, table.graph)
 
     def newEpisode(  # noqa: N802
         self,
@@ -406,77 +281,6 @@ class Simulator(SimulatorSettings):
             self.initialize()
         return self._library.table(scan_id).graph
 
-    @property
-    def robot_actions(self) -> tuple[str, ...]:
-        """The robot actions the body takes besides ``"stop"`` (none for the point body)."""
-        if not self._initialized:
-            self.initialize()
-        return self._kind.robot_actions
-
-    def scan(self, scan_id: str) -> Scan:
-        """The scan the simulator uses for ``scan_id`` with its geometry (loaded on first use).
-
-        Raises:
-            UnknownScanError: No scan or graph can be found for ``scan_id``.
-        """
-        if not self._initialized:
-            self.initialize()
-        return self._library.scan(scan_id)
-
-    def people(self, element: int = 0) -> Crowd:
-        """The people element ``element`` shares its episode with (reacting to it, if set).
-
-        Raises:
-            NotInitializedError: No episode has been started.
-        """
-        self._started("people")
-        return self._batch.elements[element].crowd
-
-    def crowd(self, scan_id: str) -> Crowd:
-        """The people of ``scan_id`` (made on first use from the seed and the scan).
-
-        Raises:
-            MissingDataError: A real scan the placement file does not list, without region
-                labels to place people by (see :mod:`havln_mj.sim.people`).
-        """
-        if not self._initialized:
-            self.initialize()
-        return self._crowd(self._library.table(scan_id))
-
-    def people_source(self, scan_id: str) -> str:
-        """Where the people of ``scan_id`` come from, in words (for banners and reports).
-
-        Raises:
-            MissingDataError: As :meth:`crowd`.
-        """
-        if not self._initialized:
-            self.initialize()
-        if self._crowds is None:
-            return "none (humans=False)"
-        source = getattr(self._crowds, "source", None)
-        return source(scan_id) if source is not None else "the simulator's crowd factory"
-
-    def draw(self, element: int = 0) -> tuple[mujoco.MjModel, mujoco.MjData]:
-        """Element ``element``'s world posed at its time: the people, the body, its camera.
-
-        The model and data a live viewer shows (kinematics done); it shares them with the
-        simulator, so re-draw after every action.
-
-        Raises:
-            NotInitializedError: No episode has been started.
-            InvalidArgumentError: ``element`` is not a batch index.
-        """
-        self._started("draw")
-        n = len(self._batch.elements)
-        if (
-            isinstance(element, bool)
-            or not isinstance(element, numbers.Integral)
-            or not 0 <= element < n
-        ):
-            raise InvalidArgumentError(f"element {element!r} out of range; valid 0–{n - 1}")
-        el = self._batch.elements[element]
-        return el.body.scene(el.elevation, el.people_t)
-
     # ------------------------------------------------------------------ actions
 
     def makeAction(  # noqa: N802
@@ -519,32 +323,6 @@ class Simulator(SimulatorSettings):
         self._batch.apply(actions)
         self._timers["process"] += time.perf_counter() - t0
 
-    def wait(self, seconds: Sequence[float]) -> None:
-        """Each element stays where it is, looking where it looks, for ``seconds`` (≥ 0).
-
-        An extension of MatterSim (HA3D's frame counter, made explicit): people go on moving,
-        the collision signal covers the whole wait, and the state (images included) is that
-        at the end. ``makeAction`` with index 0 and no turn is the same with
-        :data:`~havln_mj.sim.batch.WAIT_S`.
-
-        Raises:
-            NotInitializedError: No episode has been started.
-            BatchSizeError: ``seconds`` does not have one entry per batch element.
-            InvalidArgumentError: A duration is negative or not finite.
-        """
-        t0 = time.perf_counter()
-        self._running()
-        durations = []
-        for i, s in enumerate(self._per_element("seconds", seconds)):
-            ok = isinstance(s, numbers.Real) and not isinstance(s, bool) and math.isfinite(s)
-            if not ok or s < 0:
-                raise InvalidArgumentError(
-                    f"wait for batch element {i} must be a finite number of seconds ≥ 0, got {s!r}"
-                )
-            durations.append(float(s))
-        self._batch.apply([(i, 0, 0.0, 0.0) for i in range(len(durations))], durations)
-        self._timers["process"] += time.perf_counter() - t0
-
     def makeRobotAction(self, action: Sequence[str]) -> None:  # noqa: N802
         """One robot action per element, of :data:`~havln_mj.sim.body.ROBOT_ACTIONS`.
 
@@ -563,35 +341,6 @@ class Simulator(SimulatorSettings):
             for act in self._per_element("action", action)
         ]
         self._batch.robot(acts)
-        self._timers["process"] += time.perf_counter() - t0
-
-    def step(self, actions: Sequence[object]) -> None:
-        """One action per element, of any kind; None leaves the element alone.
-
-        An extension of MatterSim for task code that steps elements independently: a graph
-        action is a tuple ``(index, dHeading, dElevation)`` (as ``makeAction``), an
-        :class:`~havln_mj.sim.egocentric.EgoAction` member an egocentric action (STOP leaves
-        the element alone), a string a robot action of
-        :data:`~havln_mj.sim.body.ROBOT_ACTIONS` (``"stop"`` leaves it alone). The whole batch is
-        checked before anything moves.
-
-        Raises:
-            NotInitializedError: No episode has been started.
-            BatchSizeError: ``actions`` does not have one entry per batch element.
-            InvalidActionError: An action of no kind, or invalid for its element.
-        """
-        t0 = time.perf_counter()
-        elements = self._running()
-        graph, robot = parse_mixed(
-            elements,
-            self._per_element("actions", actions),
-            self._cfg.half_hfov(),
-            self._kind.robot_actions,
-        )
-        if graph:
-            self._batch.apply(graph)
-        if any(r != "stop" for r in robot):
-            self._batch.robot(robot)
         self._timers["process"] += time.perf_counter() - t0
 
     def _running(self) -> list[Element]:
@@ -648,16 +397,6 @@ class Simulator(SimulatorSettings):
         self._started("getHumanPositions")
         return [self._batch.people_at(el).copy() for el in self._batch.elements]
 
-    def collision_points(self) -> list[np.ndarray]:
-        """Each element's people as the collision rule measures them: ``(K, 3)`` each.
-
-        Pelvis positions (the strict rule), or HA3D's tracked points
-        (:func:`~havln_mj.sim.crowd.ha3d_points`) with ``collision_rule="ha3d"``; at the
-        time of the element's last state.
-        """
-        self._started("collision_points")
-        return [np.array(self._batch.collision_points(el)) for el in self._batch.elements]
-
     def _started(self, what: str) -> None:
         if self._batch is None or not self._batch.elements:
             raise NotInitializedError(f"{what} called before newEpisode()")
@@ -667,11 +406,6 @@ class Simulator(SimulatorSettings):
     def resetTimers(self) -> None:  # noqa: N802
         """Zeroes the timers ``timingInfo`` reports."""
         self._timers.update(process=0.0, render=0.0, frames=0)  # the batch shares the dict
-
-    def timing(self) -> dict[str, float]:
-        """Seconds in simulator calls and in rendering, and frames rendered, since the reset."""
-        t = self._timers
-        return {"process_s": t["process"], "render_s": t["render"], "frames": t["frames"]}
 
     def timingInfo(self) -> str:  # noqa: N802
         """Time spent in simulator calls and in rendering since the last reset."""
@@ -693,52 +427,3 @@ class Simulator(SimulatorSettings):
     get_geodesic_distance = getGeodesicDistance
     get_state = getState
     get_human_state = getHumanState
-
-
-def _collision_rule(value: object, threshold: float) -> CollisionRule:
-    if isinstance(value, CollisionRule):
-        return value
-    named = {"strict": CollisionRule.strict, "ha3d": CollisionRule.ha3d}
-    if isinstance(value, str) and value in named:
-        return named[value](threshold)
-    raise InvalidArgumentError(
-        f"collision_rule {value!r} unknown; valid: 'strict', 'ha3d' or a CollisionRule"
-    )
-
-
-def _human_clock(value: object) -> HumanClock:
-    if isinstance(value, HumanClock):
-        return value
-    named = {"continuous": HumanClock.continuous, "ha3d": HumanClock.ha3d}
-    if isinstance(value, str) and value in named:
-        return named[value]()
-    raise InvalidArgumentError(
-        f"human_clock {value!r} unknown; valid: 'continuous', 'ha3d' or a HumanClock"
-    )
-
-
-def _check_pair(rule: CollisionRule, clock: HumanClock, reactions: object | None) -> None:
-    """HA3D's clock poses people only in states, and its people do not react."""
-    if clock.kind == "ha3d" and rule.check != "state":
-        raise InvalidArgumentError(
-            "HA3D's human clock poses people only in states: it needs a per-state collision "
-            "check (collision_rule='ha3d'), not the continuous one"
-        )
-    if clock.kind == "ha3d" and reactions is not None:
-        raise InvalidArgumentError(
-            "HA3D's human clock needs people who do not react (reactions=False): on one "
-            "shared frame counter there is no track for them to react to"
-        )
-
-
-def _reactions(value: object) -> object | None:
-    """The reactions of ``reactions=`` (None when people do not react)."""
-    if value is False:
-        return None
-    from havln_mj.humans.reactions import Reactions  # the humans package, only when used
-
-    if value is True:
-        return Reactions()
-    if isinstance(value, Reactions):
-        return value if value.enabled else None
-    raise InvalidArgumentError(f"reactions takes a bool or a Reactions, got {value!r}")

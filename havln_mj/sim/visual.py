@@ -1,9 +1,12 @@
 """Visual mesh parts as MuJoCo assets and geoms, with their textures.
 
 Each part becomes one mesh asset and one world geom named ``visual/<k>_<part name>``:
-no contacts, in the visual geom group. An untextured part keeps its ``rgba``. A textured part
-gets a 2-D texture holding its image, a material using it, and the mesh's per-vertex texture
-coordinates.
+no contacts, in the visual geom group. A textured part gets a 2-D texture holding its image
+(RGB, or RGBA for a blended overlay), a material using it, and the mesh's per-vertex texture
+coordinates; the material's colour is the part's ``rgba``, which MuJoCo multiplies with the
+texture. An untextured part keeps its ``rgba`` on the geom, or on a material when it shines or
+glows. Parts that look alike share one material, and an image shared by parts is uploaded
+once.
 
 Texture orientation: :class:`~havln_mj.scene.mesh.MeshPart` stores images top row first and
 UVs in the OBJ convention (``v = 0`` at the image's bottom). MuJoCo puts the first row of a
@@ -36,14 +39,19 @@ def safe_name(text: str) -> str:
 
 
 def _add_texture(spec: mujoco.MjSpec, name: str, image: np.ndarray) -> None:
-    """Adds a 2-D RGB texture called ``name`` holding ``image`` (H×W×3 uint8, top row first)."""
-    if image.ndim != 3 or image.shape[2] != 3 or image.dtype != np.uint8:
+    """Adds a 2-D texture called ``name`` holding ``image`` (H×W×3 or ×4 uint8, top row first)."""
+    if image.ndim != 3 or image.shape[2] not in (3, 4) or image.dtype != np.uint8:
         raise InvalidArgumentError(
-            f"texture {name!r} must be an H×W×3 uint8 array, got {image.dtype} {image.shape}"
+            f"texture {name!r} must be an H×W×3 or H×W×4 uint8 array, "
+            f"got {image.dtype} {image.shape}"
         )
-    height, width = image.shape[:2]
+    height, width, channels = image.shape
     texture = spec.add_texture(
-        name=name, type=mujoco.mjtTexture.mjTEXTURE_2D, width=width, height=height, nchannel=3
+        name=name,
+        type=mujoco.mjtTexture.mjTEXTURE_2D,
+        width=width,
+        height=height,
+        nchannel=channels,
     )
     # The attribute takes bytes (the constructor keyword wants a list of ints: far slower).
     texture.data = np.ascontiguousarray(image).tobytes()
@@ -87,6 +95,31 @@ def _mujoco_texcoords(uv: np.ndarray) -> np.ndarray:
     return out.ravel()
 
 
+def _material(
+    spec: mujoco.MjSpec,
+    part: MeshPart,
+    texture: str | None,
+    emission: float,
+    cache: dict[tuple, str],
+) -> str:
+    """The name of a material for ``part`` (made once per distinct look)."""
+    glow = max(part.emission, emission if texture is not None else 0.0)
+    look = (texture, part.rgba, part.shine, glow)
+    name = cache.get(look)
+    if name is None:
+        name = cache[look] = f"visual/mat{len(cache)}"
+        material = spec.add_material(
+            name=name,
+            rgba=part.rgba,
+            emission=glow,
+            specular=0.5 * part.shine,
+            shininess=0.2 + 0.6 * part.shine,
+        )
+        if texture is not None:
+            material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = texture
+    return name
+
+
 def add_visual_parts(
     spec: mujoco.MjSpec,
     parts: list[MeshPart],
@@ -100,7 +133,7 @@ def add_visual_parts(
         spec: The model being built.
         parts: The mesh parts (see :func:`havln_mj.scene.mesh.load_mesh_parts`).
         group: Geom group of the new geoms.
-        emission: Emission of textured materials (0 lets the scene's lights alone shade
+        emission: Least emission of textured materials (0 lets the scene's lights alone shade
             them; scan textures already hold baked lighting, so a higher value with dimmer
             lights looks closer to the photographs).
 
@@ -112,6 +145,7 @@ def add_visual_parts(
         InvalidArgumentError: A part's vertices, faces, UVs or texture do not fit together.
     """
     textures: dict[int, str] = {}  # id(image) -> texture name; shared images upload once
+    materials: dict[tuple, str] = {}
     added = 0
     for k, part in enumerate(parts):
         name = f"visual/{k}_{safe_name(part.name)}"
@@ -131,18 +165,16 @@ def add_visual_parts(
             userface=faces.ravel(),
             inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL,  # open meshes have no volume
         )
-        geom = {"group": group, "contype": 0, "conaffinity": 0}
+        geom: dict = {"group": group, "contype": 0, "conaffinity": 0}
+        texture = None
         if uv is not None and part.texture is not None:
             mesh.usertexcoord = _mujoco_texcoords(uv)
             texture = textures.get(id(part.texture))
             if texture is None:
                 texture = textures[id(part.texture)] = f"visual/tex{len(textures)}"
                 _add_texture(spec, texture, part.texture)
-            material = spec.add_material(
-                name=name, rgba=(1.0, 1.0, 1.0, 1.0), emission=emission, specular=0.0
-            )
-            material.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = texture
-            geom["material"] = name
+        if texture is not None or part.shine > 0.0 or part.emission > 0.0:
+            geom["material"] = _material(spec, part, texture, emission, materials)
         else:
             geom["rgba"] = part.rgba
         spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name, **geom)

@@ -1,9 +1,15 @@
 """World builder: a scan becomes a MuJoCo model through ``mujoco.MjSpec``.
 
-Visual geometry is the scan's mesh, one mesh geom per material (group ``VISUAL``, no
-contacts). Collision geometry (group ``COLLISION``, hidden from cameras) is the exact boxes
-of a procedural house, or the CoACD convex decomposition of the mesh for scans without boxes.
-Lighting is a soft headlight plus two directional lights, shadows off.
+Visual geometry is the scan's mesh, one mesh geom per look (texture, colour, finish; group
+``VISUAL``, no contacts): a CPU renderer pays per geom drawn, so a building's parts are
+merged. Label geometry (group ``render.labels.LABELS``, hidden from cameras) holds one mesh
+per object instance of a scan that has labels, and people's geoms are labelled, for the
+segmentation pass (:mod:`havln_mj.render.labels`). Collision geometry (group ``COLLISION``,
+hidden from cameras) is the exact boxes of a procedural house, or the CoACD convex
+decomposition of the mesh for scans without boxes. Lighting is a soft headlight, a warm key
+light from above and a cool fill, all directional and without shadows: MuJoCo's renderer
+lights per vertex, so lamps would not pool on large faces, and each light or shadow map
+costs frame rate on a CPU. Windows and lamp shades glow by emission instead.
 """
 
 from __future__ import annotations
@@ -18,8 +24,11 @@ import numpy as np
 
 from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
+from havln_mj.render.labels import add_label_meshes, label_people
 from havln_mj.robot.point_body import add_point_body
 from havln_mj.scene.collision import CoacdParams, decompose
+from havln_mj.scene.matterport.labelmesh import scan_label_meshes
+from havln_mj.scene.mesh import merge_by_look
 from havln_mj.scene.scan import Scan, floor_heights
 from havln_mj.sim.visual import add_visual_parts, safe_name
 
@@ -180,8 +189,9 @@ def _add_hulls(spec: mujoco.MjSpec, scan: Scan, options: WorldOptions) -> int:
 def world_spec(scan: Scan, options: WorldOptions | None = None) -> tuple[mujoco.MjSpec, str, int]:
     """The uncompiled world: building, lights and the point-body agent with its camera.
 
-    Callers add bodies (robots, props) to the spec before compiling it; ``build_world`` is
-    this plus ``compile``.
+    Callers add bodies (robots, props, people) to the spec before compiling it, then call
+    :func:`havln_mj.render.labels.label_people` so people segment as people;
+    ``build_world`` is this plus people, their labels and ``compile``.
 
     Returns:
         (spec, collision mode used, number of collision geoms).
@@ -200,7 +210,7 @@ def world_spec(scan: Scan, options: WorldOptions | None = None) -> tuple[mujoco.
     spec.visual.global_.offheight = int(options.offscreen[1])
     spec.visual.headlight.ambient = (0.4, 0.4, 0.4)
     spec.visual.headlight.diffuse = (0.3, 0.3, 0.3)
-    spec.visual.headlight.specular = (0.0, 0.0, 0.0)
+    spec.visual.headlight.specular = (0.08, 0.08, 0.08)
     spec.visual.quality.shadowsize = 0
     # Capsules and spheres (people) tessellated coarser than MuJoCo's default 28 × 16: on a
     # CPU renderer this more than doubles the frame rate with people in view.
@@ -220,7 +230,8 @@ def world_spec(scan: Scan, options: WorldOptions | None = None) -> tuple[mujoco.
             specular=(0.0, 0.0, 0.0),
             castshadow=False,
         )
-    add_visual_parts(spec, scan.mesh_parts)
+    add_visual_parts(spec, merge_by_look(scan.mesh_parts))
+    add_label_meshes(spec, scan_label_meshes(scan))
     mode = options.collision
     if mode == "auto":
         mode = "boxes" if scan.boxes is not None else "coacd"
@@ -261,5 +272,6 @@ def build_world(
     options = options or WorldOptions()
     spec, mode, n = world_spec(scan, options)
     add_people(spec, list(people), skins, style=options.people_style)
+    label_people(spec)
     model = spec.compile()
     return World(model, scan, mode, n, time.perf_counter() - t0)

@@ -15,6 +15,10 @@ from havln_mj.agents.train import Trainer, main, read_config  # noqa: E402
 from havln_mj.errors import InvalidArgumentError, MissingDataError  # noqa: E402
 from havln_mj.eval.run import main as eval_main  # noqa: E402
 
+EventAccumulator = pytest.importorskip(
+    "tensorboard.backend.event_processing.event_accumulator"
+).EventAccumulator
+
 CM = read_config(Path("vln_cm_smoke"), None, []).__dict__ | {"agent": "vln_cm"}
 DT = read_config(Path("vln_dt_smoke"), None, []).__dict__ | {"agent": "vln_dt"}
 
@@ -32,11 +36,32 @@ def _weights(path):
 def test_vln_cm_trains_writes_its_files_and_is_evaluated(tmp_path, capsys):
     out = tmp_path / "run"
     assert main(["--config", str(_config(tmp_path, CM)), "--out", str(out), "--no-progress"]) == 0
-    for name in ("checkpoint.pt", "best.pt", "train.log", "history.json", "loss.png"):
+    for name in (
+        "checkpoint.pt",
+        "best.pt",
+        "train.log",
+        "history.json",
+        "loss.png",
+        "config.json",
+    ):
         assert (out / name).is_file(), name
     history = json.loads((out / "history.json").read_text())
     assert [h["iteration"] for h in history] == [2, 4]
     assert all(np.isfinite(h["loss"]) and 0 <= h["val_sr"] <= 1 for h in history)
+    # TensorBoard holds the same numbers as history.json.
+    events = EventAccumulator(str(out / "tensorboard"))
+    events.Reload()
+    loss = events.Scalars("train/loss")
+    assert [e.step for e in loss] == [2, 4]
+    np.testing.assert_allclose([e.value for e in loss], [h["loss"] for h in history], rtol=1e-6)
+    assert [e.value for e in events.Scalars("val/sr")] == pytest.approx(
+        [h["val_sr"] for h in history]
+    )
+    # The resolved config reads back to the same run.
+    assert (
+        read_config(out / "config.json", None, []).resolved()
+        == read_config(_config(tmp_path, CM), None, []).resolved()
+    )
     log = (out / "train.log").read_text()
     assert "expert demos" in log and "random-walk demos" in log
     capsys.readouterr()
@@ -85,7 +110,7 @@ def test_config_errors(tmp_path, capsys):
     assert read_config(Path("vln_cm_smoke"), "vln_cm", []).iterations == 4  # built-in by name
     with pytest.raises(MissingDataError, match="agents/configs"):
         read_config(tmp_path / "none.json", None, [])
-    with pytest.raises(InvalidArgumentError, match="unknown config keys"):
+    with pytest.raises(InvalidArgumentError, match="unknown config key 'epochs'"):
         read_config(_config(tmp_path, {**CM, "epochs": 3}), None, [])
     with pytest.raises(InvalidArgumentError, match="is for 'vln_cm'"):
         read_config(_config(tmp_path, CM), "vln_dt", [])
@@ -93,3 +118,14 @@ def test_config_errors(tmp_path, capsys):
         read_config(_config(tmp_path, CM), None, ["random_fraction=2"])
     assert main(["--config", str(_config(tmp_path, CM)), "--set", "feedback=beam"]) == 2
     assert "feedback 'beam' unknown" in capsys.readouterr().err
+
+
+def test_resume_without_a_checkpoint_is_an_error(tmp_path, capsys):
+    code = main(["--config", str(_config(tmp_path, CM)), "--out", str(tmp_path / "new"),
+                 "--resume", "--no-progress"])  # fmt: skip
+    assert code == 2
+    assert "no checkpoint to resume from" in capsys.readouterr().err
+    assert not (tmp_path / "new").exists()  # nothing was built or written
+    cfg = read_config(_config(tmp_path, CM), None, [])
+    with pytest.raises(MissingDataError, match="no checkpoint to resume from"):
+        Trainer(cfg, tmp_path / "empty", progress=False).run(resume=True)

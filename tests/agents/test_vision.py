@@ -15,7 +15,6 @@ from havln_mj.agents.vision import (  # noqa: E402
     PretrainHeads,
     ResNetFeatures,
     ViewEncoder,
-    _split,
     encode_views,
     load_resnet152,
     prepare_imagenet,
@@ -24,6 +23,7 @@ from havln_mj.agents.vision import (  # noqa: E402
     pretrain_loss,
     resnet152,
 )
+from havln_mj.agents.vision.pretrain import _split  # noqa: E402
 from havln_mj.errors import (  # noqa: E402
     InvalidArgumentError,
     MalformedDataError,

@@ -154,3 +154,47 @@ def test_every_seed_renders(scans, worlds, seed):
     assert np.all(frame.depth > 0.0) and np.all(
         frame.depth < 30.0
     )  # closed house: walls everywhere
+
+
+# ---------------------------------------------------------------- the look
+
+
+@pytest.mark.parametrize("seed", [0, 3, 7])
+def test_every_part_is_labelled_and_furniture_keeps_to_its_boxes(scans, seed):
+    from havln_mj.scene.matterport.categories import SceneLabels, mpcat40_index
+
+    scan = scans[seed]
+    labels = SceneLabels.read(scan.folder / "semantics.json")
+    parts = scan.mesh_parts
+    assert {p.name for p in parts} == set(labels.parts)
+    objects = scan.regions.objects
+    by_object: dict[int, list] = {}
+    for part in parts:
+        inst = labels.instance(part.name)
+        if inst.object is not None:
+            by_object.setdefault(inst.object, []).append((inst, part))
+    assert set(by_object) == {o.index for o in objects}  # every item is drawn
+    for obj in objects:
+        drawn = by_object[obj.index]
+        own = [inst for inst, _ in drawn if inst.category == obj.category.replace("_", " ")]
+        assert own and all(i.mpcat40 == mpcat40_index(obj.mpcat40) for i in own)
+        verts = np.concatenate([p.vertices for _, p in drawn])
+        lo, hi = obj.bbox[:3], obj.bbox[3:]
+        # Inside the item's footprint; above it only soft things resting on it or cabinets
+        # and mirrors hung over it.
+        assert np.all(verts[:, :2] >= lo[:2] - 0.011) and np.all(verts[:, :2] <= hi[:2] + 0.011)
+        assert verts[:, 2].min() >= -1e-6
+    kinds = {i.category for i in labels.instances}
+    assert {"floor", "wall", "ceiling", "door", "ceiling lamp"} <= kinds
+    assert any(p.textured for p in parts)
+
+
+def test_the_look_never_changes_the_house():
+    # Houses are drawn from their seed alone: dressing them draws from its own generator.
+    a = generate_house(4)
+    b = generate_house(4)
+    from havln_mj.scene.procedural.look import dress_house
+
+    dress_house(b)
+    np.testing.assert_array_equal(a.boxes.lo, b.boxes.lo)
+    assert dumps_connectivity(a.connectivity) == dumps_connectivity(b.connectivity)

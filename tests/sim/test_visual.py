@@ -120,7 +120,7 @@ def test_untextured_part_renders_its_rgba_and_geoms_are_visual_only(tmp_path):
     assert names == ["visual/0_painted", "visual/1_plain_wall_1", "visual/2_painted"]
     assert np.all(model.geom_contype == 0) and np.all(model.geom_conaffinity == 0)
     assert np.all(model.geom_group == groups.VISUAL)
-    assert model.ntex == 1 and model.nmat == 2  # one image, uploaded once
+    assert model.ntex == 1 and model.nmat == 1  # one image, uploaded once; one shared material
     assert model.geom_matid[1] == -1
     np.testing.assert_allclose(model.geom_rgba[1], (0, 1, 0, 1))
 
@@ -163,3 +163,56 @@ def test_large_textures_can_be_shrunk_on_load(tmp_path):
     assert _close(rgb[H // 2, W // 2 - 8], RED) and _close(rgb[H // 2, W // 2 + 8], BLUE)
     with pytest.raises(ValueError, match="max_texture_size"):
         load_mesh_parts(obj, max_texture_size=0)
+
+
+def _quad_part(name, texture, z=0.0, rgba=(1.0, 1.0, 1.0, 1.0), shine=0.0, emission=0.0):
+    verts = np.array([[-1, -1, z], [1, -1, z], [1, 1, z], [-1, 1, z]], float)
+    uv = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], np.float32)
+    faces = np.array([[0, 1, 2], [0, 2, 3]], np.int32)
+    return MeshPart(name, verts, faces, rgba, uv, texture, shine, emission)
+
+
+def test_written_glb_reads_back_part_by_part_with_its_finish(tmp_path):
+    from havln_mj.scene.mesh import write_glb
+
+    paint = _halves(RED, BLUE, axis=1)
+    overlay = np.zeros((8, 8, 4), np.uint8)
+    overlay[..., 3] = 128
+    parts = [
+        _quad_part("1:wood", paint, rgba=(0.8, 0.6, 0.4, 1.0), shine=0.3),
+        _quad_part("2:wood", paint, z=0.1, rgba=(0.8, 0.6, 0.4, 1.0), shine=0.3),
+        _quad_part("2:lamp", None, z=0.2, rgba=(1.0, 0.9, 0.8, 1.0), emission=1.0),
+        _quad_part("3:shade", overlay, z=0.3, rgba=(1.0, 1.0, 1.0, 0.99)),
+    ]
+    write_glb(parts, tmp_path / "m.glb")
+    back = {p.name: p for p in load_mesh_parts(tmp_path / "m.glb")}
+    assert set(back) == {"1:wood", "2:wood", "2:lamp", "3:shade"}  # one part per node
+    assert back["1:wood"].texture is back["2:wood"].texture  # one image, shared
+    assert abs(back["1:wood"].shine - 0.3) < 1e-6 and back["1:wood"].rgba[0] == pytest.approx(
+        0.8, abs=0.003
+    )
+    assert back["2:lamp"].emission == 1.0 and back["2:lamp"].texture is None
+    assert back["3:shade"].texture.shape == (8, 8, 4) and back["3:shade"].rgba[3] < 1.0
+    np.testing.assert_allclose(back["2:wood"].vertices, parts[1].vertices)
+
+
+def test_parts_that_look_alike_merge_and_share_one_material():
+    from havln_mj.scene.mesh import merge_by_look
+
+    paint = _halves(RED, BLUE, axis=1)
+    parts = [
+        _quad_part("1:wood", paint, shine=0.3),
+        _quad_part("2:wood", paint, z=0.1, shine=0.3),
+        _quad_part("3:oak", paint, z=0.2, rgba=(0.5, 0.5, 0.5, 1.0), shine=0.3),
+    ]
+    merged = merge_by_look(parts)
+    assert [p.name for p in merged] == ["wood", "oak"]
+    assert len(merged[0].faces) == 4 and merged[0].faces.max() == 7
+    spec = mujoco.MjSpec()
+    shade = _quad_part("4:shade", np.zeros((4, 4, 4), np.uint8), 0.3, (1, 1, 1, 0.99))
+    add_visual_parts(spec, [*merged, shade])
+    model = spec.compile()
+    assert model.ntex == 2 and model.nmat == 3
+    assert model.tex_nchannel[1] == 4  # the overlay keeps its alpha
+    np.testing.assert_allclose(model.mat_rgba[1], (0.5, 0.5, 0.5, 1.0))  # tint of the texture
+    assert model.mat_specular[0] == pytest.approx(0.15)

@@ -10,8 +10,10 @@ from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.frames import forward
 from havln_mj.render.camera import Camera
+from havln_mj.render.labels import LABELS, geom_labels
 from havln_mj.robot.point_body import CAMERA, PointBody
 from havln_mj.scene.collision import CoacdParams
+from havln_mj.scene.matterport.categories import mpcat40_index
 from havln_mj.scene.procedural.generate import generate_house, write_scan
 from havln_mj.scene.scan import load_scan, read_scan_folder
 from havln_mj.sim.world import WorldOptions, build_world
@@ -54,21 +56,43 @@ def test_bad_collision_mode_is_rejected():
         WorldOptions(collision="boxed")
 
 
+def _pixel_ray(heading, row, col, width, height, vfov_deg=60.0):
+    """The direction through a pixel's centre, camera level at ``heading``, scaled so that its
+    component along the view axis is 1 (so a ray's hit distance is the planar depth)."""
+    t = np.tan(np.radians(vfov_deg) / 2)
+    x = (2 * (col + 0.5) / width - 1) * t * width / height
+    y = (1 - 2 * (row + 0.5) / height) * t
+    right = np.array([np.cos(heading), -np.sin(heading), 0.0])
+    return forward(heading) + x * right + y * np.array([0.0, 0.0, 1.0])
+
+
 def test_depth_to_the_wall_ahead_matches_the_geometry():
+    # Depth is where the visual mesh is. Where a wall (or its door, window or picture) is
+    # seen, that lies on the wall's collision box or up to 6 cm in front of it (skirting,
+    # frames, pictures, an open door leaf), never behind it.
     scan = load_scan("proc-5")
     model = build_world(scan).model
     data = mujoco.MjData(model)
+    semantic, _ = geom_labels(model)
+    on_walls = [mpcat40_index(c) for c in ("wall", "door", "window", "picture")]
+    geom = np.zeros(1, dtype=np.int32)
     with Camera(model, CAMERA, 96, 72, geom_groups=groups.CAMERA_GROUPS) as cam:
         checked = 0
         for vp in scan.graph.nodes[:12]:
             for heading in (0.0, np.pi / 2, np.pi, 3 * np.pi / 2):
                 body = PointBody(scan.graph.position(vp), heading=heading)
                 body.write(model, data)
-                expected = _ray(model, data, body.position, forward(heading), groups.COLLISION)
-                if expected < 0:
-                    continue
+                start, ahead = body.position, _pixel_ray(heading, 36, 48, 96, 72)
+                seen = _ray(model, data, start, ahead, groups.VISUAL)
                 depth = cam.render(data, rgb=False).depth
-                assert abs(depth[36, 48] - expected) < 0.02, (vp, heading, depth[36, 48], expected)
+                assert abs(depth[36, 48] - seen) < 0.01, (vp, heading, depth[36, 48], seen)
+                labelled = mujoco.mj_ray(
+                    model, data, start, ahead, _group_mask(LABELS), 1, -1, geom
+                )
+                if labelled < 0 or semantic[geom[0]] not in on_walls:
+                    continue
+                solid = _ray(model, data, start, ahead, groups.COLLISION)
+                assert solid - 0.06 <= seen <= solid + 0.002, (vp, heading, seen, solid)
                 checked += 1
     assert checked >= 20
 

@@ -314,3 +314,43 @@ def read_house(path: Path, viewpoint_ids: Collection[str] | None = None) -> Regi
         objects=tuple(out_objects),
         viewpoint_region=viewpoint_region,
     )
+
+
+def read_object_classes(path: Path | str) -> dict[int, tuple[str, int]]:
+    """Each object's category name and mpcat40 index, by ``O`` line object index.
+
+    Objects with category -1 read ``("unknown", 41)`` (mpcat40's ``unlabeled``).
+
+    Raises:
+        MissingDataError: The file does not exist.
+        MalformedDataError: The file is not ``ASCII 1.1``, or a ``C`` or ``O`` line is
+            malformed or refers to a missing category.
+    """
+    path = Path(path)
+    categories: dict[int, tuple[str, int]] = {}
+    objects: list[tuple[_Line, int, int]] = []
+    for line in _lines(path):
+        kind = line.tokens[0]
+        if kind not in ("C", "O"):
+            continue
+        if len(line.tokens) < _MIN_FIELDS[kind]:
+            raise line.error(f"needs at least {_MIN_FIELDS[kind]} fields, got {len(line.tokens)}")
+        if kind == "C":
+            mpcat40 = line.integer(4, "mpcat40_index")
+            categories[line.integer(1, "category_index")] = (
+                line.tokens[3].replace("#", " "),
+                mpcat40,
+            )
+        else:
+            objects.append(
+                (line, line.integer(1, "object_index"), line.integer(3, "category_index"))
+            )
+    out = {}
+    for line, index, category in objects:
+        if category < 0:
+            out[index] = (_NO_CATEGORY[0], 41)
+        elif category in categories:
+            out[index] = categories[category]
+        else:
+            raise line.error(f"object {index} refers to category {category}, which has no C line")
+    return out

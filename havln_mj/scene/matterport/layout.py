@@ -119,6 +119,32 @@ def _zips(root: Path, scan_id: str) -> list[Path]:
     return found
 
 
+def label_files(mesh: Path, scan_id: str, layout: str) -> tuple[Path, Path]:
+    """Where a scan's per-face object labels and ``.house`` file sit beside its mesh.
+
+    Raw layout: ``<base>/house_segmentations/<scan>.ply`` (faces carry ``face_segment``, the
+    object index) for a mesh at ``<base>/matterport_mesh/<id>/<id>.obj``. Habitat layout:
+    ``<scan>_semantic.ply`` (faces carry ``object_id``) beside ``<scan>.glb``. The paths are
+    not checked.
+
+    Returns:
+        (ply, house).
+    """
+    if layout == "raw":
+        folder = mesh.parent.parent.parent / "house_segmentations"
+        return folder / f"{scan_id}.ply", folder / f"{scan_id}.house"
+    return mesh.parent / f"{scan_id}_semantic.ply", mesh.parent / f"{scan_id}.house"
+
+
+SKYBOX_FOLDER = "matterport_skybox_images"
+
+
+def skybox_folders(scan_id: str, root: Path | str) -> list[Path]:
+    """Where a scan's ``matterport_skybox_images`` folder may be, in the order tried."""
+    root = Path(root).expanduser()
+    return [root.joinpath(*parts, scan_id, SKYBOX_FOLDER) for parts in _RAW_BASES]
+
+
 def find_house_file(scan_id: str, root: Path | str | None) -> Path | None:
     """A scan's ``.house`` file in either layout under ``root``, even without its mesh."""
     if root is None:

@@ -9,7 +9,7 @@ from havln_mj.scene.procedural.furnish import Item
 from havln_mj.scene.procedural.layout import FloorPlan, Room
 from havln_mj.scene.procedural.recipe import Recipe
 
-_SLAB = 0.1  # floor and ceiling thickness
+SLAB = 0.1  # floor and ceiling thickness
 
 
 def _subtract(lo: float, hi: float, holes: list[tuple[float, float]]) -> list[tuple[float, float]]:
@@ -33,7 +33,7 @@ def _wall_box(
     return np.array([a, n0, z0]), np.array([b, n1, z1])
 
 
-def _room_walls(room: Room, plan: FloorPlan, recipe: Recipe) -> list[tuple[np.ndarray, np.ndarray]]:
+def room_walls(room: Room, plan: FloorPlan, recipe: Recipe) -> list[tuple[np.ndarray, np.ndarray]]:
     """Wall and lintel boxes lining the inside of one room (each room paints its own side)."""
     t_in, t_out = recipe["interior_wall_half"], recipe["exterior_wall"]
     height = plan.wall_height
@@ -93,7 +93,7 @@ def house_boxes(plan: FloorPlan, recipe: Recipe, items: list[Item]) -> BoxSet:
     for room in plan.rooms:
         spec = recipe.room(room.kind)
         add(
-            np.array([room.x0, room.y0, -_SLAB]),
+            np.array([room.x0, room.y0, -SLAB]),
             np.array([room.x1, room.y1, 0.0]),
             "floor",
             f"floor_{room.kind}",
@@ -101,12 +101,12 @@ def house_boxes(plan: FloorPlan, recipe: Recipe, items: list[Item]) -> BoxSet:
         )
         add(
             np.array([room.x0, room.y0, plan.wall_height]),
-            np.array([room.x1, room.y1, plan.wall_height + _SLAB]),
+            np.array([room.x1, room.y1, plan.wall_height + SLAB]),
             "ceiling",
             "ceiling",
             ceiling,
         )
-        for b_lo, b_hi in _room_walls(room, plan, recipe):
+        for b_lo, b_hi in room_walls(room, plan, recipe):
             add(b_lo, b_hi, "wall", f"wall_{room.kind}", spec["wall"])
     for item in items:
         for part in item.parts:

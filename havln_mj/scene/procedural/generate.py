@@ -2,50 +2,27 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from havln_mj.cache import atomic_write_json
 from havln_mj.errors import InvalidArgumentError
-from havln_mj.scene.boxes import BoxSet
 from havln_mj.scene.connectivity import Connectivity, write_connectivity
-from havln_mj.scene.mesh import boxes_to_parts, write_glb
+from havln_mj.scene.mesh import write_glb
 from havln_mj.scene.procedural.build import house_boxes
 from havln_mj.scene.procedural.furnish import Item, door_keepouts, furnish_room, inner_rect
-from havln_mj.scene.procedural.layout import FloorPlan, plan_house
+from havln_mj.scene.procedural.house import ProceduralHouse
+from havln_mj.scene.procedural.layout import plan_house
+from havln_mj.scene.procedural.look import dress_house
+from havln_mj.scene.procedural.materials import library_digest
 from havln_mj.scene.procedural.recipe import Recipe, load_recipe
-from havln_mj.scene.procedural.viewpoints import (
-    ViewpointGraph,
-    place_viewpoints,
-    room_is_passable,
-)
+from havln_mj.scene.procedural.viewpoints import place_viewpoints, room_is_passable
 from havln_mj.scene.regions import Level, Region, Regions, SceneObject
-from havln_mj.scene.scanfolder import BOXES, CONNECTIVITY, MESH_GLB, META, REGIONS
+from havln_mj.scene.scanfolder import BOXES, CONNECTIVITY, MESH_GLB, META, REGIONS, SEMANTICS
 
 # Bump when generator code changes what a seed produces: cached scans are rebuilt.
-GENERATOR_VERSION = 1
-
-
-@dataclass(frozen=True)
-class ProceduralHouse:
-    """Everything a seed produces, before it is written to disk."""
-
-    scene_id: str
-    seed: int
-    plan: FloorPlan
-    items: tuple[Item, ...]
-    boxes: BoxSet
-    viewpoints: ViewpointGraph
-    connectivity: Connectivity
-    regions: Regions
-    recipe_digest: str
-
-    @property
-    def area(self) -> float:
-        """Floor area in m²."""
-        return self.plan.width * self.plan.depth
+GENERATOR_VERSION = 2
 
 
 def _camera_pose(position: np.ndarray) -> np.ndarray:
@@ -117,12 +94,12 @@ def generate_house(
         viewpoint_region={vp: int(r) for vp, r in zip(ids, vg.room, strict=True)},
     )
     return ProceduralHouse(
-        scene_id, int(seed), plan, tuple(items), boxes, vg, connectivity, regions, recipe.digest
+        scene_id, int(seed), plan, tuple(items), boxes, vg, connectivity, regions, recipe
     )
 
 
 def write_scan(house: ProceduralHouse, folder: Path, *, with_boxes: bool = True) -> None:
-    """Writes the scan folder: mesh, connectivity, regions, metadata (and exact boxes).
+    """Writes the scan folder: mesh, part labels, connectivity, regions, metadata (and boxes).
 
     Args:
         house: The generated house.
@@ -131,7 +108,9 @@ def write_scan(house: ProceduralHouse, folder: Path, *, with_boxes: bool = True)
             without it, the world builder decomposes the mesh with CoACD like a real scan.
     """
     folder.mkdir(parents=True, exist_ok=True)
-    write_glb(boxes_to_parts(house.boxes), folder / MESH_GLB)
+    parts, labels = dress_house(house)
+    write_glb(parts, folder / MESH_GLB)
+    labels.write(folder / SEMANTICS)
     write_connectivity(folder / CONNECTIVITY, house.connectivity)
     house.regions.write(folder / REGIONS)
     if with_boxes:
@@ -144,6 +123,7 @@ def write_scan(house: ProceduralHouse, folder: Path, *, with_boxes: bool = True)
             "seed": house.seed,
             "generator_version": GENERATOR_VERSION,
             "recipe": house.recipe_digest,
+            "materials": library_digest(),
             "area_m2": round(house.area, 2),
         },
         indent=1,
