@@ -25,7 +25,7 @@ from havln_mj import dmenv  # noqa: E402
 from havln_mj.gym import ENV_IDS  # noqa: E402
 from havln_mj.scene.scan import load_scan  # noqa: E402
 
-SMALL = {"width": 32, "height": 24, "depth": True, "human_mask": True}
+SMALL = {"width": 32, "height": 24, "depth": True, "human_mask": True, "segmentation": True}
 STEPS = 4
 _OBJECTS = {
     "body": mujoco.mjtObj.mjOBJ_BODY,

@@ -288,9 +288,9 @@ class Batch:
         if self._blank is None:
             if starting and el.film is not None:
                 el.film.tick(el.time)
-            rgb, depth, mask = self._images(el)
+            rgb, depth, mask, semantic, instance = self._images(el)
         else:
-            (rgb, depth), mask = self._blank, None
+            (rgb, depth), mask, semantic, instance = self._blank, None, None, None
         el.state = SimState(
             el.table.scan_id,
             el.step,
@@ -311,6 +311,8 @@ class Batch:
             outcome.contacts,
             outcome.arrived,
             outcome.diverged,
+            semantic,
+            instance,
         )
 
     def _contact(self, el: Element, outcome: Outcome) -> Proximity:
@@ -337,10 +339,10 @@ class Batch:
             return ha3d_points(el.crowd, self.people_at(el))
         return self.people_at(el)
 
-    def _images(self, el: Element) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    def _images(self, el: Element) -> tuple:
         cfg = self.cfg
         if not cfg.rendering:
-            return (*self.format.blank(cfg.width, cfg.height), None)
+            return (*self.format.blank(cfg.width, cfg.height), None, None, None)
         t0 = time.perf_counter()
         view = el.body.render(self.cfg.view_settings(), el.elevation, el.people_t)
         images = self.format.images(view)

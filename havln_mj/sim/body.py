@@ -250,7 +250,10 @@ def make_kind(
     if name == "point":
         from havln_mj.sim.point import PointKind
 
-        return PointKind(load_scan, cfg.world_options, cfg.cache_size, speed, turn_rate)
+        skybox = cfg.dataset_path if cfg.skybox else None
+        return PointKind(
+            load_scan, cfg.world_options, cfg.cache_size, speed, turn_rate, skybox_root=skybox
+        )
     raise InvalidArgumentError(f"body {name!r} unknown; valid: {', '.join(BODY_KINDS)}")
 
 

@@ -40,6 +40,8 @@ class ViewSettings:
         vfov: Vertical field of view in radians.
         depth: Whether depth is rendered.
         human_mask: Whether the human mask is rendered (a second, segmentation pass).
+        labels: Whether semantic and instance labels are rendered (the same second pass:
+            :func:`~havln_mj.render.labels.render_labels`).
     """
 
     width: int
@@ -47,15 +49,27 @@ class ViewSettings:
     vfov: float
     depth: bool = False
     human_mask: bool = False
+    labels: bool = False
 
 
 @dataclass(frozen=True)
 class View:
-    """One rendered view: colour, depth in metres (or None) and the human mask (or None)."""
+    """One rendered view.
+
+    Attributes:
+        rgb: H×W×3 ``uint8`` colour.
+        depth: H×W ``float32`` planar depth in metres, or None.
+        human_mask: H×W ``bool``, True where a person is seen, or None.
+        semantic: H×W ``uint8`` mpcat40 class (42: a person), or None.
+        instance: H×W ``int32`` object instance (people from
+            :data:`~havln_mj.render.labels.PERSON_INSTANCE_BASE`), or None.
+    """
 
     rgb: np.ndarray
     depth: np.ndarray | None
     human_mask: np.ndarray | None
+    semantic: np.ndarray | None = None
+    instance: np.ndarray | None = None
 
 
 def _pitch_quat(base: np.ndarray, pitch: float) -> np.ndarray:
@@ -159,6 +173,7 @@ class Frames:
         camera: str,
         settings: ViewSettings,
         pitch: float = 0.0,
+        skybox: tuple | None = None,
     ) -> View:
         """Poses the people at ``t`` and renders ``camera``'s view of ``data``.
 
@@ -169,25 +184,44 @@ class Frames:
             settings: Image size, field of view, and whether depth and the mask are wanted.
             pitch: Radians the camera is tilted up from its place in the model (a robot's
                 head camera looking up or down).
+            skybox: ``(skybox, rotation)`` to show a viewpoint's photographs with the people
+                composited over them (:func:`~havln_mj.render.skybox.render_skybox_frame`;
+                the camera stands at that viewpoint), or None for the model's own building.
         """
         cam = self.camera(camera, settings)
         meshes = self.pose(data, t, camera, pitch)
         for mesh in meshes:
             cam.upload_mesh(mesh)
-        # People out of this camera's view are left out of its scene (the image is the same).
-        hidden = self._poser.hide_unseen(
-            data, self.model.camera(camera).id, settings.width / settings.height
-        )
+        semantic = instance = mask = None
+        if skybox is not None:
+            from havln_mj.render.skybox import render_skybox_frame
+
+            shot = render_skybox_frame(self.model, data, cam, *skybox)
+            rgb, depth, mask = shot.rgb, shot.depth, shot.people
+            depth = depth if settings.depth else None
+            hidden = False
+        else:
+            # People out of this camera's view are left out of its scene (the same image).
+            hidden = self._poser.hide_unseen(
+                data, self.model.camera(camera).id, settings.width / settings.height
+            )
         try:
-            frame = cam.render(data, rgb=True, depth=settings.depth)
-            mask = None
-            if settings.human_mask:
+            if skybox is None:
+                frame = cam.render(data, rgb=True, depth=settings.depth)
+                rgb, depth = frame.rgb, frame.depth
+            if settings.labels:
+                from havln_mj.render.labels import PERSON, render_labels
+
+                labels = render_labels(self.model, data, cam)
+                semantic, instance = labels.semantic, labels.instance
+                mask = semantic == PERSON if mask is None else mask
+            elif settings.human_mask and mask is None:
                 ids = cam.render_geom_ids(data)
                 mask = (ids >= 0) & self._human_geoms[np.maximum(ids, 0)]
         finally:
             if hidden:
                 self._poser.show_all()
-        return View(frame.rgb, frame.depth, mask)
+        return View(rgb, depth, mask if settings.human_mask else None, semantic, instance)
 
     def close(self) -> None:
         """Releases the cameras' GL resources (the frames can render again afterwards)."""

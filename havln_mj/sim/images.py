@@ -52,8 +52,11 @@ class ImageFormat:
             self._blank = (rgb, depth)
         return self._blank
 
-    def images(self, view: View) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """``(colour, depth, human mask)`` of a rendered view (blank depth when not rendered)."""
+    def images(self, view: View) -> tuple:
+        """``(colour, depth, human mask, semantic, instance)`` of a rendered view.
+
+        Depth is blank when not rendered; the mask and labels are None when not asked for.
+        """
         rgb = to_bgr(view.rgb) if self.bgr else view.rgb
         if view.depth is None:
             h, w = view.rgb.shape[:2]
@@ -62,4 +65,4 @@ class ImageFormat:
             depth = view.depth[..., None]
         else:
             depth = depth_to_mattersim(view.depth)
-        return rgb, depth, view.human_mask
+        return rgb, depth, view.human_mask, view.semantic, view.instance

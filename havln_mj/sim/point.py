@@ -10,6 +10,7 @@ the rig) and kept in a least-recently-used cache.
 
 from __future__ import annotations
 
+import logging
 import math
 from collections import OrderedDict
 from collections.abc import Callable
@@ -29,6 +30,8 @@ from havln_mj.sim.memory import release_free_memory
 from havln_mj.sim.navigation import camera_positions
 from havln_mj.sim.world import WorldOptions, build_world
 
+log = logging.getLogger(__name__)
+
 
 class Stage:
     """A scan's rendering world: the building, its people and the point rig, with its frames.
@@ -36,8 +39,11 @@ class Stage:
     For views from any camera pose: the point body's, and tools that look around a scan.
     """
 
-    def __init__(self, scan: Scan, options: WorldOptions, crowd: Crowd) -> None:
+    def __init__(
+        self, scan: Scan, options: WorldOptions, crowd: Crowd, skybox_root: str | None = None
+    ) -> None:
         self.world = build_world(scan, options, crowd.shapes, crowd.skins)
+        self.skybox = _skybox_source(scan, skybox_root)
         self.data = mujoco.MjData(self.world.model)
         self.frames = Frames(self.world.model, crowd, options.people_style)
         self.rig = PointBody(np.zeros(3))
@@ -50,11 +56,20 @@ class Stage:
         self.rig.write(self.world.model, self.data)
 
     def render(
-        self, pose: tuple, settings: ViewSettings, t: float, camera: str | None = None
+        self,
+        pose: tuple,
+        settings: ViewSettings,
+        t: float,
+        camera: str | None = None,
+        skybox: tuple | None = None,
     ) -> View:
-        """The view from the rig at ``pose`` (or from ``camera``) at simulated time ``t``."""
+        """The view from the rig at ``pose`` (or from ``camera``) at simulated time ``t``.
+
+        ``skybox``: ``(skybox, rotation)`` of the viewpoint the rig stands at, to show its
+        photographs (see :meth:`Frames.render`).
+        """
         self.place(pose)
-        return self.frames.render(self.data, t, camera or CAMERA, settings)
+        return self.frames.render(self.data, t, camera or CAMERA, settings, skybox=skybox)
 
     def close(self) -> None:
         """Releases the cameras' GL resources."""
@@ -70,6 +85,8 @@ class PointKind:
         cache_size: How many rendering worlds are kept.
         speed: Walking speed (m/s) for the clock.
         turn_rate: Turning rate (rad/s) for the clock.
+        skybox_root: The user's Matterport3D root, to show real scans' skybox photographs
+            at viewpoints (None: the mesh).
     """
 
     name = "point"
@@ -82,8 +99,10 @@ class PointKind:
         cache_size: int,
         speed: float,
         turn_rate: float,
+        skybox_root: str | None = None,
     ) -> None:
         self._scan = scan
+        self._skybox_root = skybox_root
         self._options = world_options
         self._cache_size = max(1, cache_size)
         self.speed, self.turn_rate = speed, turn_rate
@@ -102,7 +121,9 @@ class PointKind:
         """The rendering world of ``scan_id`` (built on first use, least recently used out)."""
         stage = self._stages.get(scan_id)
         if stage is None:
-            stage = self._stages[scan_id] = Stage(self._scan(scan_id), self._options, crowd)
+            stage = self._stages[scan_id] = Stage(
+                self._scan(scan_id), self._options, crowd, self._skybox_root
+            )
             while len(self._stages) > self._cache_size:
                 _, old = self._stages.popitem(last=False)
                 old.close()
@@ -232,7 +253,33 @@ class GraphPointBody:
     def render(
         self, settings: ViewSettings, elevation: float, t: float, camera: str | None = None
     ) -> View:
-        """The rig camera's view at ``t`` (mid-action while filming)."""
-        pose = self._drawn or (np.asarray(self.xyz), self.heading, elevation)
+        """The rig camera's view at ``t`` (mid-action while filming).
+
+        At a viewpoint of a scan with skybox photographs (skybox mode), those photographs
+        with the people over them; between viewpoints, and elsewhere, the mesh.
+        """
         stage = self._kind.stage(self.scan_id, self.crowd)
-        return stage.render(pose, settings, t, camera)
+        if self._drawn is not None:
+            return stage.render(self._drawn, settings, t, camera)
+        sky = None
+        if stage.skybox is not None and camera is None:
+            photos = stage.skybox.get(self.viewpoint)
+            if photos is not None:
+                rotation = self.graph.connectivity.poses[self.graph.index(self.viewpoint)][:3, :3]
+                sky = (photos, rotation)
+        pose = (np.asarray(self.xyz), self.heading, elevation)
+        return stage.render(pose, settings, t, camera, sky)
+
+
+def _skybox_source(scan: Scan, root: str | None):
+    """The scan's skybox photographs (None without a root, or when the scan has none)."""
+    if root is None:
+        return None
+    from havln_mj.errors import MissingDataError
+    from havln_mj.render.skybox import SkyboxSource
+
+    try:
+        return SkyboxSource(scan.scene_id, root)
+    except MissingDataError as exc:
+        log.warning("%s; %s is rendered from its mesh", exc, scan.scene_id)
+        return None

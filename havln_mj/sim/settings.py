@@ -41,6 +41,8 @@ _SETTERS = {
     "color_order": "set_color_order",
     "depth_units": "set_depth_units",
     "human_mask": "set_human_mask_enabled",
+    "labels": "set_segmentation_enabled",
+    "skybox": "set_skybox_enabled",
     "world_options": "set_world_options",
 }
 
@@ -66,11 +68,15 @@ class Settings:
     color_order: str = "BGR"
     depth_units: str = "mattersim"
     human_mask: bool = False
+    labels: bool = False
+    skybox: bool = False
     world_options: WorldOptions = field(default_factory=lambda: WorldOptions(collision="none"))
 
     def view_settings(self) -> ViewSettings:
         """What each rendered frame looks like."""
-        return ViewSettings(self.width, self.height, self.vfov, self.depth, self.human_mask)
+        return ViewSettings(
+            self.width, self.height, self.vfov, self.depth, self.human_mask, self.labels
+        )
 
     def half_hfov(self) -> float:
         """Half the horizontal field of view, ``vfov · width / height / 2`` (MatterSim's)."""
@@ -204,6 +210,25 @@ class SimulatorSettings:
     def set_human_mask_enabled(self, value: bool) -> None:
         """Whether states carry ``humanMask`` (a second, segmentation pass per frame)."""
         self._set("human_mask", _check_bool("set_human_mask_enabled", value))
+
+    def set_segmentation_enabled(self, value: bool) -> None:
+        """Whether states carry ``semantic`` (mpcat40 classes, people 42) and ``instance`` ids.
+
+        One extra render pass per frame (it also gives ``humanMask``). Procedural houses are
+        labelled by their generator; real scans by their ``.house`` objects when the user's
+        Matterport3D data has them.
+        """
+        self._set("labels", _check_bool("set_segmentation_enabled", value))
+
+    def set_skybox_enabled(self, value: bool) -> None:
+        """Whether real scans show their Matterport3D skybox photographs, as MatterSim does.
+
+        Needs the user's ``matterport_skybox_images`` under the dataset path
+        (``setDatasetPath``); the people MuJoCo draws are composited over the photographs
+        where they are nearer than the scan's mesh. A viewpoint whose files are missing is
+        named in a warning and rendered from the mesh.
+        """
+        self._set("skybox", _check_bool("set_skybox_enabled", value))
 
     def set_world_options(self, options: WorldOptions) -> None:
         """How rendered worlds are built.

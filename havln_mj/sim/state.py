@@ -92,6 +92,10 @@ class SimState:
         arrived: Whether the last action's move reached its target viewpoint. When False,
             ``location`` is the last viewpoint the body stood at, not the target.
         diverged: With the GO1: the physics diverged (the episode is over).
+        semantic: H×W ``uint8`` mpcat40 class of each pixel (42: a person; 0: unlabelled);
+            None unless segmentation is enabled (and rendering is on).
+        instance: H×W ``int32`` object instance of each pixel (people from 65536, one id
+            each for the life of the scene); None unless segmentation is enabled.
     """
 
     __slots__ = (
@@ -104,6 +108,7 @@ class SimState:
         "heading",
         "humanContacts",
         "humanMask",
+        "instance",
         "isCrushed",
         "location",
         "minHumanDistance",
@@ -111,6 +116,7 @@ class SimState:
         "pose",
         "rgb",
         "scanId",
+        "semantic",
         "step",
         "time",
         "viewIndex",
@@ -137,6 +143,8 @@ class SimState:
         humanContacts: int = 0,  # noqa: N803
         arrived: bool = True,
         diverged: bool = False,
+        semantic: np.ndarray | None = None,
+        instance: np.ndarray | None = None,
     ) -> None:
         self.scanId = scanId
         self.step = step
@@ -157,6 +165,8 @@ class SimState:
         self.humanContacts = humanContacts
         self.arrived = arrived
         self.diverged = diverged
+        self.semantic = semantic
+        self.instance = instance
 
     def __repr__(self) -> str:
         return (

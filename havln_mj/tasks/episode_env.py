@@ -99,6 +99,7 @@ class EpisodeEnv:
         rgb: Whether observations hold the RGB image.
         depth: Whether observations hold depth.
         human_mask: Whether observations hold the human mask.
+        segmentation: Whether observations hold semantic (mpcat40) and instance labels.
         render: Whether frames are rendered for ``render()`` even without image fields.
         max_depth: Depth is clipped to this (metres).
         instruction_length: Token ids per instruction (longer ones are cut).
@@ -136,6 +137,7 @@ class EpisodeEnv:
         rgb: bool = True,
         depth: bool = False,
         human_mask: bool = False,
+        segmentation: bool = False,
         render: bool = False,
         max_depth: float = 20.0,
         instruction_length: int = 80,
@@ -175,6 +177,7 @@ class EpisodeEnv:
             rgb=bool(rgb),
             depth=bool(depth),
             human_mask=bool(human_mask),
+            segmentation=bool(segmentation),
             max_depth=positive_float("max_depth", max_depth),
             instruction_length=positive_int("instruction_length", instruction_length),
             vocab_size=len(self.vocab),
@@ -242,6 +245,7 @@ class EpisodeEnv:
             sim.setCameraVFOV(self._vfov)
         sim.setDepthEnabled(obs.depth)
         sim.set_human_mask_enabled(obs.human_mask)
+        sim.set_segmentation_enabled(obs.segmentation)
         sim.set_color_order("RGB")
         sim.set_depth_units("metres")
         sim.setRestrictedNavigation(self._restricted)

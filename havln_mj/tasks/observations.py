@@ -10,6 +10,9 @@ simulator state; the gymnasium environments turn the fields into ``spaces`` and 
 ``depth``           ``H×W×1 float32`` planar depth in metres, 0 = no reading, clipped to
                     ``max_depth`` (only with ``depth=True``)
 ``human_mask``      ``H×W uint8``, 1 where a person is seen (only with ``human_mask=True``)
+``semantic``        ``H×W uint8`` mpcat40 class, 42 a person (only with ``segmentation=True``)
+``instance``        ``H×W int32`` object instance, people from 65536 (only with
+                   ``segmentation=True``)
 ``instruction``     ``L int64`` token ids of the vocabulary, 0-padded (``L`` =
                     ``instruction_length``)
 ``heading``         ``(1,) float32`` radians in [0, 2π), 0 facing +y, right positive
@@ -33,6 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from havln_mj.scene.matterport.categories import PERSON
 from havln_mj.sim.state import SimState
 
 MAX_CANDIDATE_DISTANCE = 50.0  # metres; candidate distances are clipped so the bounds hold
@@ -70,6 +74,7 @@ class Observations:
         rgb: Whether the RGB image is observed.
         depth: Whether depth is observed.
         human_mask: Whether the human mask is observed.
+        segmentation: Whether semantic and instance labels are observed.
         max_depth: Depth clip (metres).
         instruction_length: Token ids per instruction.
         vocab_size: Number of tokens.
@@ -84,6 +89,7 @@ class Observations:
         rgb: bool,
         depth: bool,
         human_mask: bool,
+        segmentation: bool = False,
         max_depth: float,
         instruction_length: int,
         vocab_size: int,
@@ -91,6 +97,7 @@ class Observations:
     ) -> None:
         self.width, self.height = width, height
         self.rgb, self.depth, self.human_mask = rgb, depth, human_mask
+        self.segmentation = segmentation
         self.max_depth = max_depth
         self.length, self.k = instruction_length, max_candidates
         h, w, k = height, width, max_candidates
@@ -101,6 +108,9 @@ class Observations:
             fields.append(Field("depth", (h, w, 1), np.float32, 0.0, max_depth))
         if human_mask:
             fields.append(Field("human_mask", (h, w), np.uint8, 0, 1))
+        if segmentation:
+            fields.append(Field("semantic", (h, w), np.uint8, 0, PERSON))
+            fields.append(Field("instance", (h, w), np.int32, 0, np.iinfo(np.int32).max))
         fields += [
             Field("instruction", (instruction_length,), np.int64, 0, vocab_size - 1),
             Field("heading", (1,), np.float32, 0.0, 2 * math.pi),
@@ -122,7 +132,7 @@ class Observations:
     @property
     def rendering(self) -> bool:
         """Whether any field needs the camera."""
-        return self.rgb or self.depth or self.human_mask
+        return self.rgb or self.depth or self.human_mask or self.segmentation
 
     def build(self, state: SimState, tokens: np.ndarray, collided: bool) -> dict[str, object]:
         """The observation of ``state`` (images in RGB and metres, as the simulator is set)."""
@@ -135,6 +145,9 @@ class Observations:
             mask = state.humanMask
             shape = (self.height, self.width)
             obs["human_mask"] = np.zeros(shape, np.uint8) if mask is None else mask.astype(np.uint8)
+        if self.segmentation:
+            obs["semantic"] = np.array(state.semantic, np.uint8, copy=True)
+            obs["instance"] = np.array(state.instance, np.int32, copy=True)
         obs["instruction"] = np.array(tokens, np.int64, copy=True)
         obs["heading"] = np.array([state.heading], np.float32)
         obs["elevation"] = np.array([state.elevation], np.float32)

@@ -3,6 +3,7 @@ import math
 import numpy as np
 import pytest
 
+from havln_mj.errors import InvalidArgumentError
 from havln_mj.humans import rotations as rot
 from havln_mj.humans.body import BodyShape
 from havln_mj.humans.catalog import load_catalog, make_clip
@@ -108,3 +109,11 @@ def test_same_seed_same_crowd_motions_and_groups():
     # Looks come from their own stream: the same placements and motions as without groups'
     # extra bodies, up to the first group.
     assert a.people[0].anchor.tolist() == alone.people[0].anchor.tolist()
+
+
+def test_samples_a_rounding_error_early_are_the_same_time():
+    crowd = ReactiveCrowd(_corridor_crowd())
+    crowd.observe_agent(np.array([0.0, 15.81200000000184]), np.array([[0.0, 3.0], [0.0, 3.0]]))
+    crowd.observe_agent(np.array([15.812, 15.9]), np.array([[0.0, 3.0], [0.0, 3.2]]))
+    with pytest.raises(InvalidArgumentError, match="time order"):
+        crowd.observe_agent(np.array([10.0]), np.array([[0.0, 3.0]]))

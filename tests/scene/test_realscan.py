@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 
 import numpy as np
 import pytest
@@ -188,3 +189,48 @@ def test_proxy_takes_region_labels_from_a_house_file_without_mesh(tmp_path):
     assert scan.kind == "graph proxy"
     assert [r.label for r in scan.regions.regions] == [r.label for r in house.regions.regions]
     assert scan.regions.viewpoint_region == house.regions.viewpoint_region
+
+
+def test_skybox_mode_shows_a_viewpoints_photographs_and_falls_back_to_the_mesh(tmp_path, caplog):
+    # Skybox mode on a made-up raw-layout scan: one viewpoint has its six faces (one plain
+    # colour each), the others none. Without people the state shows the photographs there,
+    # and the mesh (with a warning naming the files) elsewhere.
+    import logging
+
+    import cv2
+
+    from havln_mj.render.skybox import skybox_files, skybox_view
+
+    _, root, conn_dir = _made_up_matterport(tmp_path)
+    graph = load_scan(SCAN, connectivity_dir=conn_dir, mp3d_dir=root).graph
+    with_photos, without = graph.nodes[0], graph.nodes[1]
+    folder = root / "v1" / "scans" / SCAN / "matterport_skybox_images"
+    folder.mkdir(parents=True)
+    colours = [(200, 30, 30), (30, 200, 30), (30, 30, 200), (200, 200, 30), (30, 200, 200)]
+    colours.append((90, 90, 90))
+    strip = np.hstack([np.full((64, 64, 3), c[::-1], np.uint8) for c in colours])  # BGR file
+    cv2.imwrite(str(skybox_files(folder, with_photos)["small"]), strip)
+
+    def state_at(vp, skybox: bool):
+        sim = Simulator()
+        sim.setNavGraphPath(conn_dir)
+        sim.setDatasetPath(root)
+        sim.setCameraResolution(48, 36)
+        sim.set_color_order("RGB")
+        sim.set_skybox_enabled(skybox)
+        sim.newEpisode([SCAN], [vp], [0.7], [0.1])
+        state = sim.getState()[0]
+        sim.close()
+        return state
+
+    photo = state_at(with_photos, True)
+    from havln_mj.render.skybox import load_skybox
+
+    sky = load_skybox(folder, with_photos)
+    rotation = graph.connectivity.poses[graph.index(with_photos)][:3, :3]
+    expected, _ = skybox_view(sky, rotation, 0.7, 0.1, 48, 36, math.degrees(0.8))
+    assert np.abs(photo.rgb.astype(int) - expected).max() <= 2
+    with caplog.at_level(logging.WARNING):
+        fallback = state_at(without, True)
+    assert f"{without}_skybox_small.jpg" in caplog.text
+    np.testing.assert_array_equal(fallback.rgb, state_at(without, False).rgb)

@@ -219,3 +219,28 @@ def test_people_react_to_the_agent_that_stands_in_their_way(graph):
     assert not blind[:, 1].any() and not calm[:, 1].any()  # the far element never met anyone
     again, _ = wait(True)
     assert np.array_equal(calm, again)
+
+
+def test_segmentation_labels_people_and_keeps_their_instances(graph):
+    # A person 2.5 m ahead: its pixels are class 42 (person) with one instance id, the same
+    # a few seconds later; the building's pixels carry mpcat40 classes; the human mask is
+    # the person class.
+    from havln_mj.render.labels import PERSON_INSTANCE_BASE
+    from havln_mj.scene.matterport.categories import PERSON
+
+    vp = max(graph.nodes, key=graph.degree)
+    eye = graph.position(vp)
+    spot = np.array([eye[0], eye[1] + 2.5, graph.floor_z(vp)])
+    sim = _sim(rendering=True, humans=_standing_at([spot]))
+    sim.set_segmentation_enabled(True)
+    sim.set_human_mask_enabled(True)
+    sim.newEpisode([SCAN], [vp], [0.0], [-0.1])
+    first = sim.getState()[0]
+    sim.wait([3.0])
+    later = sim.getState()[0]
+    sim.close()
+    for s in (first, later):
+        person = s.semantic == PERSON
+        assert person.mean() > 0.005 and np.array_equal(person, s.humanMask)
+        assert set(np.unique(s.instance[person])) == {PERSON_INSTANCE_BASE}
+        assert (s.semantic[~person] > 0).mean() > 0.9  # walls, floor, furniture are labelled
