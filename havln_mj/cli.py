@@ -1,299 +1,77 @@
-"""``havln_mj`` command line: ``havln_mj scenes build <ids...>`` pre-builds scans.
+"""``havln_mj``: one command for everything the package does.
 
-``havln_mj view --scene <id>`` opens the live viewer (:mod:`havln_mj.viewer`).
+``havln_mj <command> [options]``, ``havln_mj <command> --help`` for the options of each:
 
-Each scene is built in its own process (scan folder, collision geometry, compiled world), so
-later runs load from the cache at once. Run ``havln_mj scenes build --help`` for options.
-``havln_mj scenes export ID --out DIR`` writes a built world as MJCF with its meshes and
-textures (see :mod:`havln_mj.sim.export`). ``havln_mj dataset build --scenes <ids...> --split
-<name>`` writes an HA-R2R style split of generated episodes (see
-:mod:`havln_mj.tasks.procedural`). ``havln_mj annotate --scene <id>`` serves a local page to
-place people and save them as HA3D placements (see :mod:`havln_mj.annotator`).
+=============  ==========================================================================
+run            build a scene and walk episodes through it on camera (``python -m havln_mj.run``)
+eval           score an agent or expert on a split (``python -m havln_mj.eval``); with
+               ``--workers N``/``--address`` on Ray actors
+view           the live MuJoCo viewer with keyboard control of the agent
+train          train VLN-CM or VLN-DT (``python -m havln_mj.agents.train``)
+featurize      render and encode a scene's views for the agents
+tables         result tables from evaluation folders (``python -m havln_mj.eval.tables``)
+scenes         ``build``: pre-build scenes; ``export``: a built world as MJCF
+dataset        ``build``: generate an HA-R2R style split in scenes
+annotate       place people in a scan on a local web page (HA3D placements)
+=============  ==========================================================================
+
+Each command is a module with ``parser(prog)`` and ``main(argv, prog)``; the ``python -m``
+forms run the same code.
 """
 
 from __future__ import annotations
 
-import argparse
+import importlib
 import sys
 from collections.abc import Sequence
-from concurrent.futures import Future, ProcessPoolExecutor, as_completed
-from pathlib import Path
 
-from tqdm import tqdm
-
-from havln_mj import argchecks
-from havln_mj.annotator import command as annotate_command
-from havln_mj.errors import HavlnError, InvalidArgumentError
-from havln_mj.humans.mujoco_people import DRAW_STYLES
-from havln_mj.scene.realscan import CONNECTIVITY_ENV, resolve_connectivity_dir
-from havln_mj.scene.scan import known_scene_ids
-from havln_mj.sim.prebuild import build_scene
-from havln_mj.sim.world import COLLISION_MODES
-
-
-def _scene_ids(args: argparse.Namespace) -> list[str]:
-    ids = list(args.ids)
-    if args.all_connectivity:
-        conn_dir = resolve_connectivity_dir(args.connectivity_dir)
-        if conn_dir is None:
-            raise InvalidArgumentError(
-                f"--all-connectivity needs --connectivity-dir (or ${CONNECTIVITY_ENV})"
-            )
-        ids += sorted(
-            p.name[: -len("_connectivity.json")] for p in conn_dir.glob("*_connectivity.json")
-        )
-    if not ids:
-        raise InvalidArgumentError("no scene ids given (e.g. proc-0 proc-1, or --all-connectivity)")
-    return list(dict.fromkeys(ids))  # each scene once, in the order given
+COMMANDS: dict[str, tuple[str, str]] = {
+    "run": ("havln_mj.run", "build a scene and walk episodes through it on camera"),
+    "eval": ("havln_mj.eval.run", "score an agent or expert on a split (Ray: --workers N)"),
+    "view": ("havln_mj.viewer", "the live MuJoCo viewer with keyboard control of the agent"),
+    "train": ("havln_mj.agents.train.cli", "train VLN-CM or VLN-DT from a config"),
+    "featurize": ("havln_mj.agents.featurize", "render and encode views for the agents"),
+    "tables": ("havln_mj.eval.tables", "result tables from evaluation folders"),
+    "scenes": ("havln_mj.commands.scenes", "pre-build scenes, or export one as MJCF"),
+    "dataset": ("havln_mj.commands.dataset", "generate an HA-R2R style split in scenes"),
+    "annotate": ("havln_mj.annotator.command", "place people in a scan on a local web page"),
+}
+"""Each command's module and what it does."""
 
 
-def _summary(row: dict) -> str:
-    """One built scene's line: kind, size, collision geometry, how its edges are walked."""
-    geoms = f"{row['collision_geoms']} {row['collision']} collision geoms"
-    routes = row["edges_by_route"]
-    walks = f"{routes} edge{'' if routes == 1 else 's'} walked by route"
-    if row["edges_by_flight"]:
-        walks += f" ({row['edges_by_flight']} along a flight drawn for it)"
-    if row["unwalkable_edges"] is not None:
-        walks += f", {row['unwalkable_edges']} unwalkable"
+def command_module(name: str):
+    """The module of command ``name`` (imported on demand: heavy ones load only when used)."""
+    return importlib.import_module(COMMANDS[name][0])
+
+
+def usage() -> str:
+    """The top-level help."""
+    width = max(map(len, COMMANDS))
+    lines = [f"  {n:<{width}}  {what}" for n, (_, what) in COMMANDS.items()]
     return (
-        f"{row['scene']}: {row['kind']}, {row['viewpoints']} viewpoints, {geoms}, {walks}, "
-        f"{row['seconds']} s"
+        "usage: havln_mj <command> [options]\n\n"
+        "HA-VLN in MuJoCo: simulate, evaluate, view, train, build and annotate.\n\n"
+        "commands:\n" + "\n".join(lines) + "\n\nhavln_mj <command> --help shows its options."
     )
-
-
-def _report(scene: str, future: Future) -> int:
-    """Writes a built scene's line; returns 1 if it failed."""
-    try:
-        tqdm.write(_summary(future.result()))
-    except HavlnError as exc:
-        tqdm.write(f"{scene}: FAILED: {exc}")
-    except Exception as exc:  # a crash in one scene must not lose the others
-        tqdm.write(f"{scene}: FAILED unexpectedly ({type(exc).__name__}: {exc})")
-    else:
-        return 0
-    return 1
-
-
-def scenes_build(args: argparse.Namespace) -> int:
-    """Builds the scenes in parallel with a progress bar; prints one line per scene.
-
-    A scene that fails is reported on its line and the others are still built.
-    """
-    ids = _scene_ids(args)
-    problem = argchecks.scene_ids("scene ids", ids, known_scene_ids())
-    if problem:
-        raise InvalidArgumentError(problem)
-    workers, note = argchecks.worker_count(args.workers, len(ids))
-    if note:
-        print(note, file=sys.stderr)
-    failures = 0
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = {
-            pool.submit(build_scene, s, args.mp3d_dir, args.connectivity_dir, args.collision): s
-            for s in ids
-        }
-        try:
-            with tqdm(total=len(ids), desc="scenes", unit="scene") as bar:
-                for future in as_completed(futures):
-                    failures += _report(futures[future], future)
-                    bar.update()
-        except KeyboardInterrupt:
-            pool.shutdown(wait=True, cancel_futures=True)  # scenes not started stay unbuilt
-            raise
-    print(f"built {len(ids) - failures} of {len(ids)} scenes")
-    return 1 if failures else 0
-
-
-def scenes_export(args: argparse.Namespace) -> int:
-    """Exports one scene as MJCF; prints what was written."""
-    from havln_mj.sim.export import export_scene
-
-    done = export_scene(
-        args.id,
-        args.out,
-        time=args.time,
-        body=args.body,
-        seed=args.seed,
-        humans=not args.no_people,
-        together=args.together,
-        people_style=args.people_style,
-        viewpoint=args.viewpoint,
-        collision=args.collision,
-        solid_people=args.solid_people,
-        mp3d_dir=args.mp3d_dir,
-        connectivity_dir=args.connectivity_dir,
-        human_placements=args.human_placements,
-    )
-    print(
-        f"wrote {done.xml} ({done.ngeom} geoms, {done.people} people at t = {args.time:g} s, "
-        f"{done.meshes} meshes, {done.textures} textures); view it with "
-        f"python -m mujoco.viewer --mjcf={done.xml}"
-    )
-    return 0
-
-
-def _add_export_parser(scenes: argparse._SubParsersAction) -> None:
-    export = scenes.add_parser(
-        "export", help="write a built world (building, people, robot) as MJCF with its assets"
-    )
-    export.add_argument("id", help="scene id: proc-<seed>, a Matterport scan id, a scan folder")
-    export.add_argument("--out", type=Path, required=True, help="output folder")
-    export.add_argument(
-        "--time", type=float, default=0.0, help="simulated seconds at which people are posed"
-    )
-    export.add_argument(
-        "--body", choices=("point", "go1"), default="point", help="the agent: camera rig or GO1"
-    )
-    export.add_argument("--seed", type=int, default=0, help="simulator seed: which people")
-    export.add_argument("--no-people", action="store_true", help="leave the people out")
-    export.add_argument(
-        "--together", type=float, default=0.0, help="chance a placed person is joined by others"
-    )
-    export.add_argument(
-        "--people-style",
-        choices=DRAW_STYLES,
-        default="pieces",
-        help="how people are drawn: dressed rigid pieces, one skinned mesh, or capsules",
-    )
-    export.add_argument(
-        "--viewpoint", default=None, help="where the agent stands (default: the first one)"
-    )
-    export.add_argument(
-        "--collision", choices=COLLISION_MODES, default="auto", help="collision geometry"
-    )
-    export.add_argument(
-        "--solid-people", action="store_true", help="people's bodies collide (push a robot)"
-    )
-    export.add_argument("--mp3d-dir", type=Path, default=None, help="Matterport3D data root")
-    export.add_argument(
-        "--connectivity-dir", type=Path, default=None, help="folder of connectivity graphs"
-    )
-    export.add_argument(
-        "--human-placements", type=Path, default=None, help="HA3D human placement file"
-    )
-
-
-def dataset_build(args: argparse.Namespace) -> int:
-    """Generates a split with a progress bar; prints the files and instruction lengths."""
-    from havln_mj.tasks.procedural import build_split
-
-    problem = argchecks.scene_ids("--scenes", args.scenes, known_scene_ids())
-    if problem:
-        raise InvalidArgumentError(problem)
-
-    built = build_split(args.scenes, args.split, args.episodes_per_scene, args.seed, args.out)
-    words = built.word_counts()
-    print(
-        f"wrote {len(built.episodes)} paths, {len(words)} instructions to {built.dataset} "
-        f"and {built.vocab}; words per instruction: mean {sum(words) / len(words):.1f}, "
-        f"min {min(words)}, max {max(words)}"
-    )
-    return 0
-
-
-def _build_problems(args: argparse.Namespace) -> list[str | None]:
-    return [
-        argchecks.in_range("--workers", args.workers, 1),
-        argchecks.existing("--mp3d-dir", args.mp3d_dir),
-        argchecks.existing("--connectivity-dir", args.connectivity_dir),
-    ]
-
-
-def _export_problems(args: argparse.Namespace) -> list[str | None]:
-    return [
-        argchecks.in_range("--time", args.time, 0.0, unit=" s"),
-        argchecks.in_range("--together", args.together, 0.0, 1.0),
-        argchecks.existing("--mp3d-dir", args.mp3d_dir),
-        argchecks.existing("--connectivity-dir", args.connectivity_dir),
-        argchecks.existing("--human-placements", args.human_placements, "file"),
-        argchecks.writable_folder("--out", args.out),
-    ]
-
-
-def _dataset_problems(args: argparse.Namespace) -> list[str | None]:
-    return [
-        argchecks.in_range("--episodes-per-scene", args.episodes_per_scene, 1),
-        argchecks.in_range("--seed", args.seed, 0),
-        argchecks.writable_folder("--out", args.out),
-    ]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``havln_mj`` command."""
-    parser = argparse.ArgumentParser(prog="havln_mj", description=__doc__.splitlines()[0])
-    sub = parser.add_subparsers(dest="group", required=True)
-    scenes = sub.add_parser("scenes", help="scene tools").add_subparsers(
-        dest="command", required=True
-    )
-    build = scenes.add_parser("build", help="pre-build scans, collision geometry and worlds")
-    build.add_argument(
-        "ids", nargs="*", help="scene ids: proc-<seed>, Matterport scan ids, scan folders"
-    )
-    build.add_argument(
-        "--all-connectivity", action="store_true", help="every scan in --connectivity-dir"
-    )
-    build.add_argument("--mp3d-dir", type=Path, default=None, help="Matterport3D data root")
-    build.add_argument(
-        "--connectivity-dir", type=Path, default=None, help="folder of connectivity graphs"
-    )
-    build.add_argument("--collision", choices=COLLISION_MODES, default="auto")
-    build.add_argument(
-        "--workers",
-        type=int,
-        default=2,
-        help="parallel processes (default 2; at most one per scene and per CPU)",
-    )
-    _add_export_parser(scenes)
-    dataset = sub.add_parser("dataset", help="episode datasets").add_subparsers(
-        dest="command", required=True
-    )
-    gen = dataset.add_parser(
-        "build", help="generate R2R-like episodes with people and instructions (HA-R2R schema)"
-    )
-    gen.add_argument(
-        "--scenes", nargs="+", required=True, help="scene ids: proc-<seed>, scan ids, folders"
-    )
-    gen.add_argument("--split", required=True, help="split name: writes HA_<split>.json")
-    gen.add_argument(
-        "--episodes-per-scene", type=int, default=20, help="paths per scene (default 20)"
-    )
-    gen.add_argument("--seed", type=int, default=0, help="seed; the simulator's people match it")
-    gen.add_argument("--out", type=Path, default=Path("."), help="output folder (default .)")
-    from havln_mj import viewer
+    """Entry point of the ``havln_mj`` command; returns the exit code."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or argv[0] in ("-h", "--help"):
+        print(usage())
+        return 0 if argv else 2
+    name, rest = argv[0], argv[1:]
+    if name not in COMMANDS:
+        from havln_mj.errors import did_you_mean
 
-    viewer.add_arguments(
-        sub.add_parser("view", help="the live MuJoCo viewer with keyboard control of the agent")
-    )
-    annotate_command.add_parser(sub)
-    args = parser.parse_args(argv)
-    if args.group == "view":
-        return viewer.main(args)
-    if args.group == "annotate":
-        try:
-            return annotate_command.annotate(args)
-        except HavlnError as exc:
-            print(f"error: {exc}", file=sys.stderr)
-            return 2
-    if args.group == "dataset":
-        problems = _dataset_problems(args)
-    elif args.command == "export":
-        problems = _export_problems(args)
-    else:
-        problems = _build_problems(args)
-    for problem in problems:
-        if problem:
-            parser.error(problem)
-    try:
-        if args.group == "dataset":
-            return dataset_build(args)
-        return scenes_export(args) if args.command == "export" else scenes_build(args)
-    except HavlnError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(
+            f"havln_mj: unknown command {name!r}; valid: {', '.join(COMMANDS)}."
+            f"{did_you_mean(name, COMMANDS)}",
+            file=sys.stderr,
+        )
         return 2
-    except KeyboardInterrupt:
-        print("interrupted: finished scenes are kept, unfinished ones left out", file=sys.stderr)
-        return 130
+    return command_module(name).main(rest, prog=f"havln_mj {name}")
 
 
 if __name__ == "__main__":

@@ -141,9 +141,12 @@ def walk(sim, scene: str, path: Sequence[str]) -> list:
     return states
 
 
-def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
-    """Parses and checks the command-line arguments (before any work is done)."""
-    p = argparse.ArgumentParser(prog="python -m havln_mj.run", description=__doc__.splitlines()[0])
+PROG = "python -m havln_mj.run"
+
+
+def parser(prog: str = PROG) -> argparse.ArgumentParser:
+    """The command's argument parser."""
+    p = argparse.ArgumentParser(prog=prog, description=__doc__.splitlines()[0])
     p.add_argument(
         "--scene",
         default=None,
@@ -230,6 +233,12 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         default=None,
         help="folder of <scan>_connectivity.json graphs (default $HAVLN_CONNECTIVITY_DIR)",
     )
+    return p
+
+
+def parse_args(argv: Sequence[str] | None, prog: str = PROG) -> argparse.Namespace:
+    """Parses and checks the command-line arguments (before any work is done)."""
+    p = parser(prog)
     args = p.parse_args(argv)
     checks = [
         (
@@ -328,9 +337,9 @@ def run(args: argparse.Namespace) -> dict:
     return summary
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def main(argv: Sequence[str] | None = None, prog: str = PROG) -> int:
     """Entry point; returns the process exit code."""
-    args = parse_args(argv)
+    args = parse_args(argv, prog)
     try:
         run(args)
     except HavlnError as exc:

@@ -194,10 +194,13 @@ def run_viewer(
     return shown
 
 
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    """The ``view`` command's arguments."""
+def parser(prog: str = "havln_mj view") -> argparse.ArgumentParser:
+    """The command's argument parser."""
+    p = argparse.ArgumentParser(prog=prog, description=__doc__.splitlines()[0])
     p.add_argument("--scene", default="proc-0", help="scene id (default proc-0)")
-    p.add_argument("--body", choices=("point", "go1"), default="point", help="agent body")
+    p.add_argument(
+        "--body", choices=("point", "go1"), default="point", help="agent body (default point)"
+    )
     p.add_argument("--no-people", action="store_true", help="leave the scene empty")
     p.add_argument("--seed", type=int, default=0, help="seed of the people and the start")
     p.add_argument("--frames", type=int, default=None, help="close after this many frames")
@@ -206,6 +209,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default="",
         help="comma-separated keys to press first: up, left, right, page_up, page_down, space",
     )
+    return p
 
 
 def _problems(args: argparse.Namespace) -> list[str | None]:
@@ -226,8 +230,9 @@ def _problems(args: argparse.Namespace) -> list[str | None]:
     ]
 
 
-def main(args: argparse.Namespace) -> int:
-    """Runs the viewer from parsed arguments; returns the exit code."""
+def main(argv: Sequence[str] | None = None, prog: str = "havln_mj view") -> int:
+    """Runs the viewer; returns the exit code (2 on bad input)."""
+    args = parser(prog).parse_args(argv)
     problems = [p for p in _problems(args) if p]
     if problems:
         print(f"error: {problems[0]}", file=sys.stderr)

@@ -48,3 +48,42 @@ def test_dataset_build_writes_a_split(tmp_path, capsys):
     assert main([*bad, "--out", str(tmp_path / "bad")]) == 2
     assert "unknown scene id 'nope'" in capsys.readouterr().err
     assert not (tmp_path / "bad").exists()
+
+
+def _parsers(parser):
+    """A parser and every subcommand parser under it."""
+    import argparse
+
+    yield parser
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                yield from _parsers(sub)
+
+
+def test_every_command_documents_every_flag():
+    import argparse
+
+    from havln_mj.cli import COMMANDS, command_module
+
+    for name in COMMANDS:
+        parser = command_module(name).parser(f"havln_mj {name}")
+        assert parser.prog == f"havln_mj {name}"
+        for p in _parsers(parser):
+            for action in p._actions:
+                if isinstance(action, argparse._HelpAction | argparse._SubParsersAction):
+                    continue
+                label = "/".join(action.option_strings) or action.dest
+                assert action.help and action.help.strip(), f"havln_mj {name}: {label}"
+
+
+def test_the_command_dispatches_and_names_what_is_valid(capsys):
+    assert main([]) == 2 and "commands:" in capsys.readouterr().out
+    assert main(["evl"]) == 2
+    assert "Did you mean 'eval'" in capsys.readouterr().err
+    for name in ("run", "eval", "train", "tables"):
+        try:
+            main([name, "--help"])
+        except SystemExit as exc:
+            assert exc.code == 0
+        assert f"usage: havln_mj {name}" in capsys.readouterr().out

@@ -249,20 +249,39 @@ def build_features(
     return encoder, store
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m havln_mj.agents.featurize``; returns the exit code."""
-    p = argparse.ArgumentParser(
-        prog="python -m havln_mj.agents.featurize", description=__doc__.splitlines()[0]
-    )
+PROG = "python -m havln_mj.agents.featurize"
+
+
+def parser(prog: str = PROG) -> argparse.ArgumentParser:
+    """The command's argument parser."""
+    p = argparse.ArgumentParser(prog=prog, description=__doc__.splitlines()[0])
     p.add_argument("--scenes", nargs="+", required=True, help="scene ids (proc-<seed>, scan ids)")
     p.add_argument("--encoder", type=Path, default=None, help="trained encoder file (.pt)")
     p.add_argument(
         "--resnet152", type=Path, default=None, help="ImageNet ResNet-152 weights (instead)"
     )
     p.add_argument("--seed", type=int, default=0, help="people seed (the dataset's)")
-    p.add_argument("--connectivity-dir", type=Path, default=None)
-    p.add_argument("--human-placements", type=Path, default=None)
+    p.add_argument(
+        "--connectivity-dir",
+        type=Path,
+        default=None,
+        help="folder of <scan>_connectivity.json graphs (default $HAVLN_CONNECTIVITY_DIR)",
+    )
+    p.add_argument(
+        "--human-placements",
+        type=Path,
+        default=None,
+        help="HA3D placement file for real scans (default $HAVLN_HA3D_PLACEMENTS)",
+    )
+    return p
+
+
+def main(argv: Sequence[str] | None = None, prog: str = PROG) -> int:
+    """``havln_mj featurize``; returns the exit code."""
+    p = parser(prog)
     args = p.parse_args(argv)
+    if args.seed < 0:
+        p.error(f"--seed must be ≥ 0, got {args.seed}")
     try:
         encoder = load_encoder(args.encoder) if args.encoder else None
         _, store = build_features(

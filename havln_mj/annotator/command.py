@@ -3,17 +3,20 @@
 from __future__ import annotations
 
 import argparse
+import sys
+from collections.abc import Sequence
 from pathlib import Path
 
 from havln_mj import argchecks
+from havln_mj.errors import HavlnError
 from havln_mj.render.camera import MAX_SIZE
 
 HELP = "place people in a scan on a local web page; save them as HA3D placements"
 
 
-def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    """Adds the ``annotate`` subcommand to a ``havln_mj`` subparser set."""
-    p = sub.add_parser("annotate", help=HELP, description=HELP)
+def parser(prog: str = "havln_mj annotate") -> argparse.ArgumentParser:
+    """The command's argument parser."""
+    p = argparse.ArgumentParser(prog=prog, description=HELP)
     p.add_argument("--scene", required=True, help="scene id: proc-<seed>, a scan id, a folder")
     p.add_argument(
         "--placements",
@@ -74,3 +77,13 @@ def annotate(args: argparse.Namespace) -> int:
         server.server_close()
         session.close()
     return 0
+
+
+def main(argv: Sequence[str] | None = None, prog: str = "havln_mj annotate") -> int:
+    """Entry point; returns the exit code (2 on bad input)."""
+    args = parser(prog).parse_args(argv)
+    try:
+        return annotate(args)
+    except HavlnError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2

@@ -1,8 +1,9 @@
-"""``python -m havln_mj.distributed.evaluate``: :mod:`havln_mj.eval` sharded over Ray actors.
+"""Evaluation sharded over Ray actors: ``havln_mj eval --workers N [--address ADDR]``.
 
-Takes every argument of ``python -m havln_mj.eval`` plus ``--workers`` (Ray actors, each
-owning a ``Simulator`` built like the single-process one) and ``--address`` (None: local Ray;
-``auto``: the running cluster; ``ray://host:10001``: Ray Client). The instructions are cut
+``--workers`` Ray actors each own a ``Simulator`` built like the single-process one;
+``--address`` picks the cluster (default a local Ray; ``auto``: the running cluster;
+``ray://host:10001``: Ray Client). ``python -m havln_mj.distributed.evaluate`` is the same
+command with two workers unless told otherwise. The instructions are cut
 into contiguous shards, run on the actors, merged back in the original order and scored
 once in the driver with the same :class:`~havln_mj.tasks.metrics.evaluator.Evaluator`, so the
 per-instruction metrics and the summary equal :func:`havln_mj.eval.run.evaluate_split`'s
@@ -24,8 +25,7 @@ from collections.abc import Sequence
 
 from havln_mj.distributed._ray import ensure_ray
 from havln_mj.errors import InvalidArgumentError
-from havln_mj.eval.cli import parse_args as eval_parse_args
-from havln_mj.eval.run import run_cli, run_instruction, score_split
+from havln_mj.eval.run import run_instruction, score_split
 from havln_mj.eval.setup import evaluation_simulator, make_agent, people_report, protocol_of
 from havln_mj.tasks.episodes import Episode
 
@@ -124,33 +124,14 @@ def evaluate_split_ray(
     return report
 
 
-def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
-    """``python -m havln_mj.eval``'s arguments plus ``--workers`` and ``--address``."""
-    extra = argparse.ArgumentParser(prog="python -m havln_mj.distributed.evaluate", add_help=False)
-    extra.add_argument("--workers", type=int, default=2, help="Ray actors (default 2)")
-    extra.add_argument(
-        "--address", default=None, help="Ray address: auto, ray://host:10001 (default: local)"
-    )
-    argv = list(sys.argv[1:] if argv is None else argv)
-    if "-h" in argv or "--help" in argv:
-        print(
-            __doc__.splitlines()[0] + "\n\nRay options: --workers N (default 2), "
-            "--address ADDR (auto, ray://host:10001; default: local Ray)\n"
-        )
-    known, rest = extra.parse_known_args(argv)
-    args = eval_parse_args(rest)
-    args.workers, args.address = known.workers, known.address
-    return args
-
-
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point; returns the process exit code (writes what ``havln_mj.eval`` writes)."""
-    args = parse_args(argv)
+    """``havln_mj eval`` on Ray actors: its arguments, with ``--workers`` 2 unless given."""
+    from havln_mj.eval.run import main as eval_main
 
-    def sharded(a: argparse.Namespace, episodes: list[Episode], split: str) -> dict:
-        return evaluate_split_ray(a, episodes, split, workers=a.workers, address=a.address)
-
-    return run_cli(args, sharded)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not any(a == "--workers" or a.startswith("--workers=") for a in argv):
+        argv = ["--workers", "2", *argv]
+    return eval_main(argv, prog="python -m havln_mj.distributed.evaluate")
 
 
 if __name__ == "__main__":

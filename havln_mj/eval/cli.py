@@ -37,9 +37,12 @@ def _existing_file(text: str) -> Path:
     return path
 
 
-def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
-    """Parses and checks the command-line arguments, before any work is done."""
-    p = argparse.ArgumentParser(prog="python -m havln_mj.eval", description=DESCRIPTION)
+PROG = "python -m havln_mj.eval"
+
+
+def parser(prog: str = PROG) -> argparse.ArgumentParser:
+    """The command's argument parser."""
+    p = argparse.ArgumentParser(prog=prog, description=DESCRIPTION)
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--dataset", nargs="+", help="R2R/HA-R2R JSON files or split names")
     src.add_argument(
@@ -55,7 +58,12 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         default="shortest",
         help=f"{', '.join(AGENTS)}, module:callable or a trained agent's checkpoint (.pt)",
     )
-    p.add_argument("--body", choices=("point", "go1"), default="point")
+    p.add_argument(
+        "--body",
+        choices=("point", "go1"),
+        default="point",
+        help="the agent's body: the point camera rig (default) or the simulated GO1",
+    )
     p.add_argument(
         "--protocol",
         choices=PROTOCOL_NAMES,
@@ -82,12 +90,24 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         action="store_true",
         help="people play their motions on the spot where they were placed (HA3D's barely move)",
     )
-    p.add_argument("--connectivity-dir", type=_existing_dir, default=None)
-    p.add_argument("--human-placements", type=_existing_file, default=None)
+    p.add_argument(
+        "--connectivity-dir",
+        type=_existing_dir,
+        default=None,
+        help="folder of <scan>_connectivity.json graphs (default $HAVLN_CONNECTIVITY_DIR)",
+    )
+    p.add_argument(
+        "--human-placements",
+        type=_existing_file,
+        default=None,
+        help="HA3D placement file for real scans (default $HAVLN_HA3D_PLACEMENTS)",
+    )
     p.add_argument(
         "--data-dir", type=_existing_dir, default=None, help="folder with r2r/ and ha_r2r/"
     )
-    p.add_argument("--out", type=Path, default=Path("havln_eval"))
+    p.add_argument(
+        "--out", type=Path, default=Path("havln_eval"), help="output folder (default havln_eval)"
+    )
     p.add_argument(
         "--resume",
         action="store_true",
@@ -103,8 +123,27 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
     p.add_argument(
         "--threads", type=int, default=None, help="torch threads of a trained agent (≥ 1)"
     )
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=1,
+        help="Ray actors to shard the instructions over (default 1: in this process); the "
+        "'distributed' extra",
+    )
+    p.add_argument(
+        "--address",
+        default=None,
+        help="Ray cluster: auto, ray://host:10001 (default: a local Ray when --workers > 1)",
+    )
+    return p
+
+
+def parse_args(argv: Sequence[str] | None, prog: str = PROG) -> argparse.Namespace:
+    """Parses and checks the command-line arguments, before any work is done."""
+    p = parser(prog)
     args = p.parse_args(argv)
     checks = [
+        (args.workers >= 1, f"--workers must be at least 1, got {args.workers}"),
         (args.per_scene >= 1, f"--per-scene must be at least 1, got {args.per_scene}"),
         (args.skip >= 0, f"--skip must be ≥ 0, got {args.skip}"),
         (0 <= args.seed < 2**32, f"--seed must be in [0, 2^32), got {args.seed}"),

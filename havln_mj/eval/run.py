@@ -50,7 +50,8 @@ import numpy as np
 from tqdm import tqdm
 
 from havln_mj.errors import HavlnError
-from havln_mj.eval.cli import load_splits, parse_args, settings
+from havln_mj.eval.cli import PROG, load_splits, parse_args, settings
+from havln_mj.eval.cli import parser as parser  # the eval command's, with its main here
 from havln_mj.eval.outputs import RECORDINGS, Outputs
 from havln_mj.eval.setup import (
     EXPERTS,
@@ -62,6 +63,7 @@ from havln_mj.eval.setup import (
     people_report,
     protocol_of,
 )
+from havln_mj.scene.navgraph import stair_edges
 from havln_mj.sim.simulator import Simulator
 from havln_mj.tasks.episodes import Episode
 from havln_mj.tasks.experts import run_expert
@@ -94,11 +96,18 @@ def run_instruction(
         max_steps=cap,
         protocol=protocol,
     )
+    end = trajectory.records[-1]
+    stairs = stair_edges(sim.graph(episode.scan), episode.path)
     return {
         "instr_id": f"{episode.path_id}_{k}",
         "index": index,
         "scan": episode.scan,
         "stopped": trajectory.stopped,
+        "terrain": "stairs" if stairs else "flat",
+        "stair_edges": [list(e) for e in stairs],
+        "fell": end.fell,
+        "true_distance": round(float(end.distance), 4),
+        "sim_seconds": round(float(end.time), 3),
         "steps": [[r.viewpoint, r.heading, r.elevation, r.is_crushed] for r in trajectory.records],
         "r2r": trajectory.r2r(),
         "frames": [frame0, sim.human_clock_frame],
@@ -172,6 +181,7 @@ def score_split(
         runs[-1].update(metrics)
     seconds = sum(r["seconds"] for r in records)
     summary = dict(result.summary)
+    summary["by_terrain"] = terrain_report(records, protocol.metrics.success_distance)
     summary.update(
         split=split,
         agent=args.agent,
@@ -191,6 +201,32 @@ def score_split(
     )
     submission = [{"instr_id": r["instr_id"], "trajectory": r["r2r"]} for r in records]
     return {"summary": summary, "episodes": runs, "submission": submission, "records": records}
+
+
+def terrain_report(records: Sequence[dict], success_distance: float) -> dict:
+    """Success, falls and time for flat episodes and for those whose path has a stair edge.
+
+    Measured from where the body truly ended (the task step's distance, from the robot's
+    true pose with the GO1), so a robot that stalled or fell on a stair counts as it is: a
+    fall is a fall and is never left out.
+    """
+    out = {}
+    for terrain in ("flat", "stairs"):
+        rows = [r for r in records if r.get("terrain") == terrain]
+        if not rows:
+            continue
+        n = len(rows)
+        out[terrain] = {
+            "instructions": n,
+            "success_rate": sum(
+                r["stopped"] and r["true_distance"] < success_distance for r in rows
+            )
+            / n,
+            "falls": sum(bool(r["fell"]) for r in rows),
+            "mean_distance_m": sum(r["true_distance"] for r in rows) / n,
+            "mean_sim_seconds": sum(r["sim_seconds"] for r in rows) / n,
+        }
+    return out
 
 
 def markdown_table(summaries: Sequence[dict]) -> str:
@@ -272,6 +308,18 @@ def run_cli(args: argparse.Namespace, evaluate: SplitRunner = evaluate_split) ->
     return 0
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point; returns the process exit code."""
-    return run_cli(parse_args(argv))
+def main(argv: Sequence[str] | None = None, prog: str = PROG) -> int:
+    """Entry point; returns the process exit code.
+
+    With ``--workers`` above 1 or an ``--address``, the instructions run on Ray actors
+    (:mod:`havln_mj.distributed.evaluate`); the scores equal a single process's.
+    """
+    args = parse_args(argv, prog)
+    if args.workers > 1 or args.address is not None:
+        from havln_mj.distributed.evaluate import evaluate_split_ray  # the Ray extra
+
+        def sharded(a, episodes, split: str) -> dict:
+            return evaluate_split_ray(a, episodes, split, workers=a.workers, address=a.address)
+
+        return run_cli(args, sharded)
+    return run_cli(args)

@@ -88,16 +88,33 @@ def markdown(
     return "\n".join(lines) + "\n"
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point; returns the exit code."""
-    p = argparse.ArgumentParser(
-        prog="python -m havln_mj.eval.tables", description=__doc__.splitlines()[0]
+PROG = "python -m havln_mj.eval.tables"
+
+
+def parser(prog: str = PROG) -> argparse.ArgumentParser:
+    """The command's argument parser."""
+    p = argparse.ArgumentParser(prog=prog, description=__doc__.splitlines()[0])
+    p.add_argument(
+        "--row",
+        action="append",
+        required=True,
+        metavar="NAME=DIR[,DIR...]",
+        help="a row: its name and the evaluation folders (--out of havln_mj eval) it reads",
     )
-    p.add_argument("--row", action="append", required=True, metavar="NAME=DIR[,DIR...]")
-    p.add_argument("--splits", nargs="+", default=["val_seen", "val_unseen"])
+    p.add_argument(
+        "--splits",
+        nargs="+",
+        default=["val_seen", "val_unseen"],
+        help="the splits, as columns (default val_seen val_unseen)",
+    )
     p.add_argument("--paper", action="store_true", help="append the paper's rows")
     p.add_argument("--out", type=Path, required=True, help="markdown file (a .json beside it)")
-    args = p.parse_args(argv)
+    return p
+
+
+def main(argv: Sequence[str] | None = None, prog: str = PROG) -> int:
+    """Entry point; returns the exit code."""
+    args = parser(prog).parse_args(argv)
     try:
         rows = {}
         for item in args.row:

@@ -14,6 +14,7 @@ are symmetric, so both views agree there.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from itertools import pairwise
@@ -296,6 +297,17 @@ class NavGraph:
 
 
 LEVEL_GAP = 1.0  # metres: viewpoint floors further apart than this are separate storeys
+STAIR_CLIMB = 0.3
+"""Metres of floor height an edge must climb (or descend) to be a stair edge."""
+
+
+def stair_edges(graph: NavGraph, path: Sequence[str]) -> list[tuple[str, str]]:
+    """The edges of ``path`` that climb or descend more than :data:`STAIR_CLIMB`."""
+    return [
+        (a, b)
+        for a, b in itertools.pairwise(path)
+        if abs(graph.floor_z(a) - graph.floor_z(b)) > STAIR_CLIMB
+    ]
 
 
 def level_groups(graph: NavGraph, gap: float = LEVEL_GAP) -> list[list[str]]:

@@ -470,8 +470,9 @@ class StepRecord:
             distance of a person.
         crushed_by: Indices of those people in ``getHumanState()``.
         time: Simulated seconds since the start.
-        distance: Geodesic distance to the goal (metres).
+        distance: Walking distance to the goal from where the body truly is (metres).
         rewards: Reward terms by name plus ``"total"`` (empty for the start state).
+        fell: The body has fallen, or its physics diverged (the episode is over).
     """
 
     action: Action | None
@@ -483,6 +484,7 @@ class StepRecord:
     time: float
     distance: float
     rewards: Mapping[str, float] = field(default_factory=dict)
+    fell: bool = False
 
 
 @dataclass(frozen=True)
@@ -572,6 +574,7 @@ def _record(result: StepResult) -> StepRecord:
         float(state.time),
         result.distance,
         rewards,
+        result.fell,
     )
 
 

@@ -7,7 +7,8 @@ import pytest
 ray = pytest.importorskip("ray")
 
 from havln_mj.distributed import build_scenes_ray, evaluate_split_ray  # noqa: E402
-from havln_mj.distributed.evaluate import _shards, parse_args  # noqa: E402
+from havln_mj.distributed.evaluate import _shards  # noqa: E402
+from havln_mj.eval.cli import parse_args  # noqa: E402
 from havln_mj.eval.run import evaluate_split  # noqa: E402
 from havln_mj.tasks.procedural import procedural_episodes  # noqa: E402
 
@@ -67,8 +68,13 @@ def test_build_scenes_ray(ray_local):
 
 
 def test_cli(ray_local, tmp_path, capsys):
-    from havln_mj.distributed.evaluate import main
+    from havln_mj.cli import main
+    from havln_mj.distributed.evaluate import main as alias
 
-    assert main([*ARGV, "--agent", "shortest", "--workers", "2", "--out", str(tmp_path)]) == 0
-    assert (tmp_path / "summary.json").exists() and (tmp_path / "episodes.json").exists()
+    argv = [*ARGV, "--agent", "shortest", "--out", str(tmp_path / "a")]
+    assert main(["eval", *argv, "--workers", "2"]) == 0
+    assert (tmp_path / "a" / "summary.json").exists()
     assert "| shortest (strict) |" in capsys.readouterr().out
+    # python -m havln_mj.distributed.evaluate: the same command, two workers by default.
+    assert alias([*ARGV, "--agent", "shortest", "--out", str(tmp_path / "b")]) == 0
+    assert (tmp_path / "b" / "episodes.json").exists()

@@ -50,20 +50,9 @@ CALLS = {
         "seed",
     ),
 }
-# Flags whose checks live in code other branches change; strict: a pass fails the run, so the
-# mark is removed once those changes are merged.
-ELSEWHERE = {"eval --seed -1": "eval's flags are checked on the evaluation protocol's branch"}
 
 
-@pytest.mark.parametrize(
-    "name",
-    [
-        pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=ELSEWHERE[n]))
-        if n in ELSEWHERE
-        else n
-        for n in CALLS
-    ],
-)
+@pytest.mark.parametrize("name", list(CALLS))
 def test_a_bad_flag_is_refused_without_a_traceback(cli, name):
     args, code, message = CALLS[name]
     proc = cli(args, timeout=120)
@@ -131,7 +120,6 @@ TRAIN = ["havln_mj.agents.train", "--config", "vln_cm_smoke", "--threads", "1"]
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="train --set and --resume are checked on the agents' branch")
 @pytest.mark.parametrize(
     "args, message",
     [

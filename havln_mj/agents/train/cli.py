@@ -15,11 +15,13 @@ from havln_mj.agents.train.config import read_config
 from havln_mj.agents.train.trainer import Trainer, checkpoint_to_resume
 from havln_mj.errors import HavlnError
 
+PROG = "python -m havln_mj.agents.train"
 
-def parser() -> argparse.ArgumentParser:
+
+def parser(prog: str = PROG) -> argparse.ArgumentParser:
     """The command's argument parser."""
     p = argparse.ArgumentParser(
-        prog="python -m havln_mj.agents.train",
+        prog=prog,
         description="Train a VLN-CM or VLN-DT agent from a JSON config.",
     )
     p.add_argument(
@@ -56,9 +58,9 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
-def main(argv: Sequence[str] | None = None) -> int:
+def main(argv: Sequence[str] | None = None, prog: str = PROG) -> int:
     """Entry point; returns the exit code (2 on bad input, with the message on stderr)."""
-    args = parser().parse_args(argv)
+    args = parser(prog).parse_args(argv)
     if args.threads is not None:
         torch.set_num_threads(max(1, args.threads))
     try:
