@@ -5,7 +5,8 @@ Two modes: rendering off (``rgb=False``) and RGB at 128×128. Actions are random
 env; episodes reset automatically. Every setup is warmed up (simulators built, first reset)
 before it is timed for ``--seconds``.
 
-* ``single``: one env stepped in this process.
+* ``single``: one env stepped in this process (also per CPU second: steadier on a shared
+  machine; ``--single-only`` times this setup alone).
 * ``async_vector``: ``gymnasium.vector.AsyncVectorEnv`` with ``--workers`` spawned workers,
   stepped in lockstep (steps/s counts every sub-env's step).
 * ``ray``: ``--workers`` Ray actors, each owning an env and stepping it ``--chunk`` steps
@@ -64,13 +65,14 @@ class Stepper:
         return n
 
 
-def bench_single(kwargs: dict, seconds: float) -> float:
+def bench_single(kwargs: dict, seconds: float) -> tuple[float, float]:
+    """Steps per second and per CPU second of one env in this process."""
     s = Stepper(kwargs, 0)
     s.steps(20)
-    n, t0 = 0, time.perf_counter()
+    n, t0, c0 = 0, time.perf_counter(), time.process_time()
     while time.perf_counter() - t0 < seconds:
         n += s.steps(10)
-    return n / (time.perf_counter() - t0)
+    return n / (time.perf_counter() - t0), n / (time.process_time() - c0)
 
 
 def bench_async(kwargs: dict, seconds: float, workers: int) -> float:
@@ -119,27 +121,37 @@ def main() -> None:
     p.add_argument("--seconds", type=float, default=5.0, help="timed seconds per setup")
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--chunk", type=int, default=50, help="steps per Ray remote call")
+    p.add_argument("--single-only", action="store_true", help="time the single env only")
     args = p.parse_args()
 
-    import ray
-
-    ray.init(num_cpus=args.workers, include_dashboard=False, log_to_driver=False)
     results: dict = {}
-    try:
+    if args.single_only:
         for mode, kwargs in MODES.items():
-            single = bench_single(kwargs, args.seconds)
-            vec = bench_async(kwargs, args.seconds, args.workers)
-            dist = bench_ray(kwargs, args.seconds, args.workers, args.chunk)
-            scale = args.workers * single
+            single, per_cpu = bench_single(kwargs, args.seconds)
             results[mode] = {
                 "single_steps_per_s": round(single, 1),
-                "async_vector_steps_per_s": round(vec, 1),
-                "ray_steps_per_s": round(dist, 1),
-                "async_vector_efficiency": round(vec / scale, 3),
-                "ray_efficiency": round(dist / scale, 3),
+                "single_steps_per_cpu_s": round(per_cpu, 1),
             }
-    finally:
-        ray.shutdown()
+    else:
+        import ray
+
+        ray.init(num_cpus=args.workers, include_dashboard=False, log_to_driver=False)
+        try:
+            for mode, kwargs in MODES.items():
+                single, per_cpu = bench_single(kwargs, args.seconds)
+                vec = bench_async(kwargs, args.seconds, args.workers)
+                dist = bench_ray(kwargs, args.seconds, args.workers, args.chunk)
+                scale = args.workers * single
+                results[mode] = {
+                    "single_steps_per_s": round(single, 1),
+                    "single_steps_per_cpu_s": round(per_cpu, 1),
+                    "async_vector_steps_per_s": round(vec, 1),
+                    "ray_steps_per_s": round(dist, 1),
+                    "async_vector_efficiency": round(vec / scale, 3),
+                    "ray_efficiency": round(dist / scale, 3),
+                }
+        finally:
+            ray.shutdown()
     print(
         json.dumps(
             {

@@ -21,6 +21,7 @@ from havln_mj.humans.clip import Clip
 from havln_mj.humans.segments import segment_orientations
 from havln_mj.humans.skeleton import JOINT, forward_kinematics
 from havln_mj.humans.skinned import Skin
+from havln_mj.humans.tracks import PelvisTable
 
 
 @dataclass(frozen=True)
@@ -117,6 +118,7 @@ class Crowd:
             self._centres[k] = (xy.min(axis=0) + xy.max(axis=0)) / 2
             self._radii[k] = np.linalg.norm(xy - self._centres[k], axis=1).max()
         self._segments = [k for k, p in enumerate(self.people) if p.clip.local is None]
+        self._table: PelvisTable | None = None
 
     def __len__(self) -> int:
         return len(self.people)
@@ -167,6 +169,15 @@ class Crowd:
     def footprint(self) -> tuple[np.ndarray, np.ndarray]:
         """Circles ``(centres (N, 2), radii (N,))`` holding each pelvis at all times."""
         return self._centres, self._radii
+
+    def pelvis_table(self) -> PelvisTable:
+        """Everyone's pelvis track, tabulated on first use (see :mod:`havln_mj.humans.tracks`)."""
+        if self._table is None:
+            roots = [p.clip.root for p in self.people]
+            self._table = PelvisTable(
+                roots, self._fps, self._loop, self._start, self._yaw_m, self._anchor
+            )
+        return self._table
 
     def pose(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """World joint positions ``(N, 24, 3)`` and orientations ``(N, 24, 4)`` at time ``t``."""

@@ -14,12 +14,22 @@ The frame pipeline uses it in three calls::
 ``pose`` writes the mocap poses of every joint body (capsules and rigid pieces follow them),
 skins the meshes that need it (SMPL skins, Anny bodies in the "skinned" style) and returns
 the ids of the meshes whose vertices changed, which each renderer must re-upload.
+
+A renderer draws every geom it is given, in view or not, and a dressed person is thousands
+of textured triangles: :meth:`PeoplePoser.hide_unseen` leaves out of the scene (alpha 0, which
+MuJoCo skips) the people whose bounding sphere lies wholly outside a camera's view, and
+:meth:`PeoplePoser.show_all` puts them back after the frame. The image does not change.
 """
 
 from __future__ import annotations
 
-import mujoco
+import math
+import re
 
+import mujoco
+import numpy as np
+
+from havln_mj import groups
 from havln_mj.humans.anny_mujoco import AnnySkinWriter
 from havln_mj.humans.crowd import Crowd
 from havln_mj.humans.mujoco_people import DRAW_STYLES, PeopleWriter, add_people
@@ -76,6 +86,24 @@ class PeoplePoser:
                 if shape.look is not None and skin is None
             }
         self._anny = AnnySkinWriter(model, anny) if anny else None
+        self._visibility(model, [shape.height for shape in crowd.shapes])
+
+    def _visibility(self, model: mujoco.MjModel, heights: list[float]) -> None:
+        """Each person's geoms, their alphas, and a sphere around the pelvis holding them."""
+        owner = re.compile(r"human(\d+)/")
+        geoms, people = [], []
+        for g in np.flatnonzero(model.geom_group == groups.HUMANS):
+            found = owner.match(model.body(int(model.geom_bodyid[g])).name)
+            if found is not None and int(found.group(1)) < len(heights):
+                geoms.append(int(g))
+                people.append(int(found.group(1)))
+        self._geoms = np.asarray(geoms, int)
+        self._owner = np.asarray(people, int)
+        self._alpha = model.geom_rgba[self._geoms, 3].copy()
+        # Nothing of a person (limbs, hair, a skirt) reaches farther from the pelvis than
+        # their height: a sphere of that radius plus a margin holds them in any pose.
+        self._radius = np.asarray(heights, float) + SPHERE_MARGIN_M
+        self._pelvis: np.ndarray | None = None
 
     def pose(self, data: mujoco.MjData, t: float) -> list[int]:
         """Poses everyone at simulated time ``t`` (kinematics not run).
@@ -86,6 +114,7 @@ class PeoplePoser:
         if not self._joints.n_people:
             return []  # nobody drawn
         positions, quats = self.crowd.pose(t)
+        self._pelvis = positions[:, 0]
         self._joints.write(data, positions, quats)
         changed = []
         if self._anny is not None:
@@ -94,5 +123,36 @@ class PeoplePoser:
             changed += self._smpl.write(self.model, data, self.crowd.skin_vertices(t))
         return changed
 
+    def hide_unseen(self, data: mujoco.MjData, camera: int, aspect: float) -> bool:
+        """Leaves out of the next frame the people wholly outside camera ``camera``'s view.
+
+        Call after :meth:`pose` and kinematics; ``aspect`` is the image's width / height.
+        Returns whether anyone was left out (then call :meth:`show_all` after the frame).
+        """
+        if self._pelvis is None or not len(self._geoms):
+            return False
+        rel = (self._pelvis - data.cam_xpos[camera]) @ data.cam_xmat[camera].reshape(3, 3)
+        x, y, depth = rel[:, 0], rel[:, 1], -rel[:, 2]  # the camera looks along its −z
+        tan_v = math.tan(math.radians(float(self.model.cam_fovy[camera])) / 2)
+        tan_h = tan_v * aspect
+        r = self._radius
+        # Distances to the four side planes (positive outside) and behind the camera.
+        outside = (
+            (depth < -r)
+            | ((np.abs(x) - depth * tan_h) / math.hypot(1.0, tan_h) > r)
+            | ((np.abs(y) - depth * tan_v) / math.hypot(1.0, tan_v) > r)
+        )
+        if not outside.any():
+            return False
+        self.model.geom_rgba[self._geoms, 3] = np.where(outside[self._owner], 0.0, self._alpha)
+        return True
+
+    def show_all(self) -> None:
+        """Puts back everyone :meth:`hide_unseen` left out."""
+        self.model.geom_rgba[self._geoms, 3] = self._alpha
+
+
+SPHERE_MARGIN_M = 0.3
+"""Metres added to a person's height for the sphere around the pelvis that holds them."""
 
 __all__ = ["DRAW_STYLES", "PeopleDrawing", "PeoplePoser"]

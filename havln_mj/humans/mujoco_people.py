@@ -21,11 +21,12 @@ import numpy as np
 from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.humans.anny_mujoco import add_anny_pieces, add_anny_skinned
-from havln_mj.humans.body import BodyShape
+from havln_mj.humans.body import BodyShape, Piece
 from havln_mj.humans.skeleton import JOINT_NAMES, NUM_JOINTS
 from havln_mj.humans.skinned import Skin, add_skin
 
 FILLER_SHRINK = 0.6  # capsule fillers inside rigid Anny pieces, relative to the mannequin
+FILLER_SLICES = 8  # sides of a filler's low-poly mesh
 PARK_Z = -100.0  # metres: where unposed people wait, out of every camera's view
 _GEOM = {
     "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE,
@@ -71,6 +72,8 @@ def add_people(
         look = shape.look if skin is None and style != "capsules" else None
         # Rigid Anny pieces keep thinner capsules inside as fillers: where a bent joint opens
         # a crease between two pieces, the filler shows clothes or skin, not the room behind.
+        # Seen only there, they are low-poly meshes; solid people's fillers stay MuJoCo
+        # capsules, which also take the contacts.
         filler = look is not None and style == "pieces"
         pieces = shape.pieces() if skin is None and (look is None or solid or filler) else []
         bodies = [
@@ -82,18 +85,23 @@ def add_people(
         elif look is not None:
             add_anny_skinned(spec, f"human{k}", bodies[0], look, PARK_Z)
         alpha = 0.0 if look is not None and not filler else 1.0  # skinned: contacts only
-        shrink = FILLER_SHRINK if filler else 1.0
         for j, body in enumerate(bodies):
             for i, piece in enumerate(p for p in pieces if p.joint == j):
+                name = f"{body_name(k, j)}/{i}"
+                rgba = (*shape.colour(piece.part), alpha)
+                if filler and not solid and piece.kind != "box":
+                    _add_filler(spec, body, name, piece, rgba)
+                    continue
                 geom = body.add_geom(
-                    name=f"{body_name(k, j)}/{i}",
+                    name=name,
                     type=_GEOM[piece.kind],
                     contype=int(solid),
                     conaffinity=int(solid),
                     group=groups.HUMANS,
-                    rgba=(*shape.colour(piece.part), alpha),
+                    rgba=rgba,
                     mass=0.0,
                 )
+                shrink = FILLER_SHRINK if filler else 1.0
                 if piece.kind == "capsule":
                     geom.fromto = (*piece.a, *piece.b)
                     geom.size = (shrink * piece.size[0], 0.0, 0.0)
@@ -101,6 +109,85 @@ def add_people(
                     geom.pos = piece.a
                     size = np.array(piece.size) * shrink
                     geom.size = (*size, *(0.0,) * (3 - len(size)))
+
+
+def _add_filler(
+    spec: mujoco.MjSpec, body: mujoco.MjsBody, name: str, piece: Piece, rgba: tuple
+) -> None:
+    """A filler inside rigid Anny pieces: a low-poly capsule (or sphere) mesh.
+
+    Fillers show only in the creases of bent joints, so a few dozen triangles do; MuJoCo's
+    own capsules are tessellated for being seen whole and cost several times as much to draw.
+    """
+    a = np.asarray(piece.a, float)
+    b = np.asarray(piece.b, float) if piece.kind == "capsule" else a
+    verts, normals, faces = capsule_mesh(a, b, FILLER_SHRINK * piece.size[0])
+    mesh = spec.add_mesh(name=f"{name}/mesh")
+    mesh.uservert = verts.astype(np.float32).ravel()
+    mesh.usernormal = normals.astype(np.float32).ravel()
+    mesh.userface = faces.astype(np.int32).ravel()
+    mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL
+    body.add_geom(
+        name=name,
+        type=mujoco.mjtGeom.mjGEOM_MESH,
+        meshname=f"{name}/mesh",
+        contype=0,
+        conaffinity=0,
+        group=groups.HUMANS,
+        rgba=rgba,
+        mass=0.0,
+    )
+
+
+def capsule_mesh(
+    a: np.ndarray, b: np.ndarray, radius: float, slices: int = FILLER_SLICES, rings: int = 2
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A closed capsule from ``a`` to ``b`` (a sphere when they coincide), outward faces.
+
+    Args:
+        a: One end of the axis.
+        b: The other end.
+        radius: The capsule's radius.
+        slices: Vertices around each ring.
+        rings: Rings per half-sphere, the equator included.
+
+    Returns:
+        Vertices ``(V, 3)``, unit normals ``(V, 3)`` and triangles ``(F, 3)``, counter-
+        clockwise seen from outside.
+    """
+    axis = b - a
+    length = float(np.linalg.norm(axis))
+    z = axis / length if length > 1e-9 else np.array([0.0, 0.0, 1.0])
+    x = np.cross(z, [1.0, 0.0, 0.0] if abs(z[0]) < 0.9 else [0.0, 1.0, 0.0])
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    phi = 2 * np.pi * np.arange(slices) / slices
+    around = np.cos(phi)[:, None] * x + np.sin(phi)[:, None] * y  # (S, 3)
+    # Rings from just above the bottom pole (around a) to just below the top pole (around
+    # b); the equator is a ring on each half-sphere, so the straight part joins them (a
+    # sphere has one equator).
+    step = np.pi / 2 / rings
+    lats = [(-np.pi / 2 + step * i, a) for i in range(1, rings + 1)]
+    lats += [(step * i, b) for i in range(0 if length > 1e-9 else 1, rings)]
+    normals = [-z[None]]
+    centres = [a[None]]
+    for lat, centre in lats:
+        normals.append(np.sin(lat) * z + np.cos(lat) * around)
+        centres.append(np.repeat(centre[None], slices, axis=0))
+    normals.append(z[None])
+    centres.append(b[None])
+    normals, centres = np.vstack(normals), np.vstack(centres)
+    k = np.arange(slices)
+    k1 = (k + 1) % slices
+    first, top = 1, len(normals) - 1
+    faces = [np.stack([np.zeros(slices, int), first + k1, first + k], axis=1)]
+    for r in range(len(lats) - 1):
+        lo, hi = first + r * slices, first + (r + 1) * slices
+        faces.append(np.stack([lo + k, lo + k1, hi + k1], axis=1))
+        faces.append(np.stack([lo + k, hi + k1, hi + k], axis=1))
+    last = first + (len(lats) - 1) * slices
+    faces.append(np.stack([np.full(slices, top), last + k, last + k1], axis=1))
+    return centres + radius * normals, normals, np.vstack(faces)
 
 
 class PeopleWriter:

@@ -31,15 +31,16 @@ import logging
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import coacd
 import numpy as np
-import trimesh
 
 from havln_mj.cache import atomic_write_bytes
 from havln_mj.errors import CorruptMeshError, InvalidArgumentError, MalformedDataError
 from havln_mj.paths import cache_dir
+
+if TYPE_CHECKING:
+    import trimesh
 
 logger = logging.getLogger(__name__)
 
@@ -143,6 +144,8 @@ class CoacdParams:
             InvalidArgumentError: A field is set away from its default but the installed CoACD
                 does not accept it.
         """
+        import coacd  # a large import: only when meshes are decomposed
+
         accepted = inspect.signature(coacd.run_coacd).parameters
         takes_any = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in accepted.values())
         kwargs = {}
@@ -301,6 +304,8 @@ def _checked_params(params: CoacdParams | None) -> CoacdParams:
 
 def _checked_arrays(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
     """Returns (float64 vertices, int64 faces) of a usable mesh, or raises CorruptMeshError."""
+    import trimesh  # a large import: only when meshes are decomposed
+
     if not isinstance(mesh, trimesh.Trimesh):
         raise InvalidArgumentError(f"mesh must be a trimesh.Trimesh, got {type(mesh).__name__}")
     vertices = np.ascontiguousarray(mesh.vertices, dtype=np.float64)
@@ -348,6 +353,8 @@ def _key(vertices: np.ndarray, faces: np.ndarray, params: CoacdParams) -> str:
 
 
 def _run_coacd(vertices: np.ndarray, faces: np.ndarray, params: CoacdParams) -> list[Hull]:
+    import coacd
+
     kwargs = params.coacd_kwargs()
     if len(vertices) >= 2**31:
         raise CorruptMeshError(f"mesh has {len(vertices)} vertices; CoACD takes at most 2**31 - 1")

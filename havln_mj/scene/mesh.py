@@ -33,14 +33,16 @@ import hashlib
 import io
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import trimesh
 
 from havln_mj.cache import atomic_write_bytes
 from havln_mj.errors import CorruptMeshError, InvalidArgumentError, MissingDataError
 from havln_mj.scene.boxes import BoxSet
+
+if TYPE_CHECKING:
+    import trimesh
 
 # Corner order and the two triangles of each face, counter-clockwise seen from outside.
 _CORNERS = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], dtype=float)
@@ -125,6 +127,8 @@ def _pil_image(texture: np.ndarray) -> Any:
 
 
 def _glb_material(part: MeshPart, name: str, images: dict[int, Any]) -> Any:
+    import trimesh  # a large import: only when meshes are written
+
     colour = np.round(np.array(part.rgba) * 255).astype(np.uint8)
     extra: dict[str, Any] = {}
     if part.textured:
@@ -153,6 +157,8 @@ def write_glb(parts: list[MeshPart], path: Path) -> None:
     material, and every image is stored once: opaque ones as JPEG, with alpha as PNG. The
     file reads back into the same parts (up to the JPEG coding of the images).
     """
+    import trimesh  # a large import: only when meshes are read or written
+
     scene = trimesh.Scene()
     scene.metadata["havln_mj"] = {"parts": "node"}
     images: dict[int, Any] = {}  # id(texture array) -> PIL image
@@ -263,6 +269,8 @@ def load_mesh_parts(
         MissingDataError: The file does not exist.
         CorruptMeshError: The file or a texture cannot be parsed, or it holds no triangles.
     """
+    import trimesh  # a large import: only when meshes are read or written
+
     if up not in UP_AXES:
         raise InvalidArgumentError(f"up must be one of {UP_AXES}, got {up!r}")
     if max_texture_size is not None and not (
@@ -365,6 +373,8 @@ def merge_by_look(parts: list[MeshPart]) -> list[MeshPart]:
 
 def parts_to_trimesh(parts: list[MeshPart]) -> trimesh.Trimesh:
     """All parts merged into one mesh (for collision decomposition and ray casts)."""
+    import trimesh  # a large import: only when meshes are read or written
+
     offsets = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
     verts = np.concatenate([p.vertices for p in parts])
     faces = np.concatenate([p.faces + o for p, o in zip(parts, offsets, strict=True)])

@@ -21,8 +21,6 @@ from itertools import pairwise
 from pathlib import Path
 
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components, dijkstra
 
 from havln_mj.errors import InvalidArgumentError, UnknownViewpointError, did_you_mean
 from havln_mj.scene.connectivity import Connectivity, read_connectivity
@@ -65,12 +63,7 @@ class NavGraph:
         adj = sub | sub.T
         np.fill_diagonal(adj, False)  # a viewpoint is not its own neighbour
         self._adjacency = adj
-        rows, cols = np.nonzero(adj)
         self._node_pos = self._positions[self._node_ix]
-        weights = self._edge_lengths(rows, cols)
-        # Explicit zeros in a sparse matrix stay edges of length 0 for csgraph.
-        n = len(self.nodes)
-        self._csr = csr_matrix((weights, (rows, cols)), shape=(n, n))
         self._dist: np.ndarray | None = None
         self._pred: np.ndarray | None = None
 
@@ -195,7 +188,9 @@ class NavGraph:
         """
         if not self.nodes:
             return []
-        _, labels = connected_components(self._csr, directed=False)
+        from scipy.sparse.csgraph import connected_components  # a large import, used rarely
+
+        _, labels = connected_components(self._sparse(), directed=False)
         groups: dict[int, list[str]] = {}
         for vp, label in zip(self.nodes, labels.tolist(), strict=True):
             groups.setdefault(label, []).append(vp)
@@ -210,7 +205,9 @@ class NavGraph:
 
     def _all_pairs(self) -> tuple[np.ndarray, np.ndarray]:
         if self._dist is None or self._pred is None:
-            dist, pred = dijkstra(self._csr, directed=False, return_predecessors=True)
+            from scipy.sparse.csgraph import dijkstra  # a large import, used rarely
+
+            dist, pred = dijkstra(self._sparse(), directed=False, return_predecessors=True)
             dist.flags.writeable = False
             self._dist, self._pred = dist, pred
         return self._dist, self._pred
@@ -285,6 +282,15 @@ class NavGraph:
                 )
             total += math.dist(self._node_pos[i], self._node_pos[j])
         return total
+
+    def _sparse(self):
+        """The edges as a ``scipy.sparse`` matrix of lengths (made on each use)."""
+        from scipy.sparse import csr_matrix
+
+        rows, cols = np.nonzero(self._adjacency)
+        # Explicit zeros in a sparse matrix stay edges of length 0 for csgraph.
+        n = len(self.nodes)
+        return csr_matrix((self._edge_lengths(rows, cols), (rows, cols)), shape=(n, n))
 
     def _edge_lengths(self, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
         return np.linalg.norm(self._node_pos[rows] - self._node_pos[cols], axis=1)

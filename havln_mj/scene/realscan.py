@@ -23,7 +23,6 @@ from havln_mj.errors import MissingDataError
 from havln_mj.scene.cache_keys import file_digest, params_digest, stat_stamp, write_manifest
 from havln_mj.scene.connectivity import check_buildable, read_connectivity
 from havln_mj.scene.graph_regions import levels_from_graph
-from havln_mj.scene.matterport.frame import check_frame
 from havln_mj.scene.matterport.house import read_house
 from havln_mj.scene.matterport.layout import (
     MatterportFiles,
@@ -33,7 +32,7 @@ from havln_mj.scene.matterport.layout import (
 )
 from havln_mj.scene.mesh import boxes_to_parts, load_mesh_parts, parts_to_trimesh, write_glb
 from havln_mj.scene.navgraph import NavGraph
-from havln_mj.scene.proxy.build import ProxyParams, build_proxy
+from havln_mj.scene.proxy.params import ProxyParams
 from havln_mj.scene.proxy.routes import write_routes
 from havln_mj.scene.scanfolder import BOXES, CONNECTIVITY, META, REGIONS, ROUTES
 
@@ -146,6 +145,10 @@ def build_real_scan(sources: RealScanSources, target: Path) -> None:
         MalformedDataError: The graph is no building's (see ``check_buildable``).
         FrameMismatchError: The mesh and the connectivity graph disagree on the frame.
     """
+    # Mesh checks and proxy synthesis pull in trimesh and scipy: only when a scan is built.
+    from havln_mj.scene.matterport.frame import check_frame
+    from havln_mj.scene.proxy.build import build_proxy
+
     scan_id, conn_path, files = sources.scan_id, sources.connectivity, sources.files
     inputs = sources.inputs()
     if inputs is None or conn_path is None:

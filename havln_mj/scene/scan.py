@@ -14,9 +14,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Any
-
-import trimesh
+from typing import TYPE_CHECKING, Any
 
 from havln_mj.cache import atomic_replace_dir, staging_dir
 from havln_mj.errors import MalformedDataError, MissingDataError
@@ -25,7 +23,6 @@ from havln_mj.scene.boxes import BoxSet
 from havln_mj.scene.cache_keys import read_manifest, write_manifest
 from havln_mj.scene.graph_regions import levels_from_graph
 from havln_mj.scene.ids import parse_scene_id
-from havln_mj.scene.mesh import MeshPart, load_mesh_parts, parts_to_trimesh
 from havln_mj.scene.navgraph import NavGraph, level_groups
 from havln_mj.scene.proxy.routes import Route, read_routes
 from havln_mj.scene.regions import Regions
@@ -39,6 +36,11 @@ from havln_mj.scene.scanfolder import (
     REGIONS,
     ROUTES,
 )
+
+if TYPE_CHECKING:
+    import trimesh
+
+    from havln_mj.scene.mesh import MeshPart
 
 log = logging.getLogger(__name__)
 
@@ -83,11 +85,15 @@ class Scan:
     @cached_property
     def mesh_parts(self) -> list[MeshPart]:
         """The visual mesh, one part per material (loaded once)."""
+        from havln_mj.scene.mesh import load_mesh_parts  # trimesh: only when meshes are read
+
         return load_mesh_parts(self.mesh_path, up=str(self.meta.get("up", "z")))
 
     @cached_property
     def mesh(self) -> trimesh.Trimesh:
         """All mesh parts merged into one mesh (for sections, slices and decomposition)."""
+        from havln_mj.scene.mesh import parts_to_trimesh
+
         return parts_to_trimesh(self.mesh_parts)
 
     @property

@@ -22,7 +22,9 @@ GraphStep = tuple[int, int, float, float]  # (element, navigable index, dHeading
 
 
 def per_element(name: str, values: object, batch_size: int) -> list:
-    """``values`` as a list with one entry per batch element."""
+    """``values`` as a list with one entry per batch element (a list given is not copied)."""
+    if type(values) is list and len(values) == batch_size:
+        return values  # the common case, checked cheaply
     if isinstance(values, str) or not isinstance(values, Sequence | np.ndarray):
         raise BatchSizeError(
             f"{name} takes a list with one entry per batch element (batch size {batch_size}), "
@@ -38,12 +40,31 @@ def per_element(name: str, values: object, batch_size: int) -> list:
 def check_index(i: int, navigable: Sequence[ViewPoint], k: object) -> int:
     """Element ``i``'s navigable-location index ``k``."""
     n = len(navigable)
+    if type(k) is int and 0 <= k < n:
+        return k  # the common case, checked cheaply
     if isinstance(k, bool) or not isinstance(k, numbers.Integral) or not 0 <= k < n:
         raise InvalidActionError(
             f"action index {k!r} for batch element {i} is out of range: "
             f"{n} navigable locations, valid 0–{n - 1}"
         )
     return int(k)
+
+
+def check_graph_steps(
+    elements: Sequence, indices: list, headings: list, elevations: list
+) -> list[GraphStep]:
+    """Each element's ``makeAction`` arguments checked: ``(element, index, dh, de)``."""
+    steps = []
+    for i, el in enumerate(elements):
+        k, dh, de = indices[i], headings[i], elevations[i]
+        if not (type(k) is int and 0 <= k < len(el.navigable)):
+            k = check_index(i, el.navigable, k)
+        if not (type(dh) is float and math.isfinite(dh)):
+            dh = check_delta(i, dh)
+        if not (type(de) is float and math.isfinite(de)):
+            de = check_delta(i, de)
+        steps.append((i, k, dh, de))
+    return steps
 
 
 def check_delta(i: int, value: object) -> float:

@@ -14,16 +14,20 @@ What the collision signal covers and which time people are posed at follow the b
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from havln_mj.frames import TWO_PI
 from havln_mj.sim.body import Body, BodyKind, Film, Outcome
 from havln_mj.sim.crowd import (
     NO_PROXIMITY,
     Crowd,
+    NearMemo,
     Proximity,
+    batch_proximity,
     ha3d_points,
     knots_proximity,
     sample_knots,
@@ -59,6 +63,7 @@ class Element:
         "film",
         "heading",
         "navigable",
+        "people",
         "people_t",
         "people_xyz",
         "state",
@@ -70,6 +75,7 @@ class Element:
 
     def __init__(self, table: NavTable, crowd: Crowd, body: Body) -> None:
         self.table, self.crowd, self.body = table, crowd, body
+        self.people = len(crowd) > 0
         self.heading = self.elevation = self.time = self.people_t = 0.0
         self.people_xyz: np.ndarray | None = None  # pelvis positions at people_t, once asked
         self.view_index = self.step = 0
@@ -110,6 +116,9 @@ class Batch:
         self.elements: list[Element] = []
         self.film: tuple[float, FilmCallback, tuple[str, ...]] | None = None
         self.reactions = None  # how people react to the agent (None: they do not)
+        self._near = NearMemo()
+        self._cos_fov: float | None = None
+        self._blank: tuple[np.ndarray, np.ndarray] | None = None
 
     def view(self, heading: float, elevation: float) -> tuple[float, float, int]:
         """Heading, elevation and view index under the view rules."""
@@ -136,12 +145,15 @@ class Batch:
             el.heading, el.elevation, _ = self.view(h, e)
             elements.append(el)
         self.elements = elements
+        self._prepare_step()
         shared = self._tick(self.clock.after_start)
+        started = []
         for i, (el, start) in enumerate(zip(elements, starts, strict=True)):
             el.people_t = shared if shared is not None else el.time
             el.film = self._new_film(i, el)
             outcome = el.body.start(start[2], el.heading, el.elevation, 0.0)
-            self.finish(i, outcome, el.elevation, starting=True)
+            started.append((el, outcome, None, el.elevation, 0))
+        self._settle_all(started, starting=True)
 
     def _tick(self, advance: Callable[[int], int]) -> float | None:
         """Advances HA3D's shared counter and returns the people's time (None: own clocks)."""
@@ -171,60 +183,124 @@ class Batch:
     def apply(
         self, actions: list[tuple[int, int, float, float]], waits: Sequence[float] | None = None
     ) -> None:
-        """Move, then rotate, for each (element, index, dh, de); ``waits`` override WAIT_S."""
-        discretized, limits = self.cfg.discretized, self.cfg.elevation_limits
+        """Move, then rotate, for each (element, index, dh, de); ``waits`` override WAIT_S.
+
+        Measured along the actions, the collision signal of every element with people is
+        computed in one call once they have all moved.
+        """
+        cfg = self.cfg
+        discretized, (lo, hi) = cfg.discretized, cfg.elevation_limits
+        self._prepare_step()
         shared = self._tick(self.clock.after_action) if actions else None
+        along = self.rule.check == "action"
+        elements, deferred = self.elements, []
         for n, (i, k, dh, de) in enumerate(actions):
-            el = self.elements[i]
+            el = elements[i]
             if shared is not None:
                 el.people_t = shared
             if discretized:
                 dh = discrete_delta(dh, HEADING_INCREMENT)
                 de = discrete_delta(de, ELEVATION_INCREMENT)
-                heading, elevation, _ = discrete_view(el.heading + dh, el.elevation + de)
+                heading, elevation, index = discrete_view(el.heading + dh, el.elevation + de)
             else:
-                heading, elevation, _ = continuous_view(el.heading + dh, el.elevation + de, limits)
+                heading = math.fmod(el.heading + dh, TWO_PI)  # wrap_heading, inlined
+                if heading < 0.0:
+                    heading += TWO_PI
+                    if heading >= TWO_PI:
+                        heading = 0.0
+                elevation, index = min(max(el.elevation + de, lo), hi), 0
             target = el.navigable[k].viewpointId
             wait_s = WAIT_S if waits is None else waits[n]
             outcome = el.body.move(target, heading, elevation, el.time, wait_s, el.film)
-            self.finish(i, outcome, elevation)
+            if not el.people:
+                self._settle(el, outcome, heading, elevation, index, NO_PROXIMITY)
+            elif along:
+                deferred.append((el, outcome, heading, elevation, index))
+            else:
+                self._settle(el, outcome, heading, elevation, index, None)
+        if deferred:
+            self._settle_all(deferred)
 
     def robot(self, actions: Sequence[str]) -> None:
         """A robot action per element (``"stop"`` leaves it alone)."""
+        self._prepare_step()
         shared = self._tick(self.clock.after_action)
-        for i, (el, act) in enumerate(zip(self.elements, actions, strict=True)):
+        moved = []
+        for el, act in zip(self.elements, actions, strict=True):
             if act != "stop":
                 if shared is not None:
                     el.people_t = shared
-                self.finish(i, el.body.robot_action(act, el.time, el.film), el.elevation)
+                outcome = el.body.robot_action(act, el.time, el.film)
+                moved.append((el, outcome, None, el.elevation, 0))
+        self._settle_all(moved)
 
-    def finish(self, i: int, outcome: Outcome, elevation: float, starting: bool = False) -> None:
-        """Advances element ``i``'s clock and view by ``outcome`` and publishes its state."""
-        el = self.elements[i]
+    def _prepare_step(self) -> None:
+        """What every element's state needs this step: the navigation rule, blank images."""
+        cfg = self.cfg
+        self._cos_fov = cfg.cos_half_hfov()
+        self._blank = None if cfg.rendering else self.format.blank(cfg.width, cfg.height)
+
+    def _settle_all(self, moved: list[tuple], starting: bool = False) -> None:
+        """Settles each ``(element, outcome, heading asked, elevation, view index)``.
+
+        Measured along the actions, the collision signal of all of them is computed in one
+        call; measured in the states, each after its state's view.
+        """
+        contacts: list[Proximity | None]
+        if self.rule.check == "action":
+            tracks = [(el.crowd, outcome.knots) for el, outcome, *_ in moved]
+            contacts = batch_proximity(tracks, self.rule.threshold, self._near)
+        else:
+            contacts = [None if m[0].people else NO_PROXIMITY for m in moved]
+        for m, contact in zip(moved, contacts, strict=True):
+            self._settle(*m, contact, starting)
+
+    def _settle(
+        self,
+        el: Element,
+        outcome: Outcome,
+        heading: float | None,
+        elevation: float,
+        index: int,
+        contact: Proximity | None,
+        starting: bool = False,
+    ) -> None:
+        """Advances ``el``'s clock and view by ``outcome`` and publishes its state.
+
+        ``heading`` is the heading the action asked for (None: the view rules are applied to
+        the body's heading, as for robot actions and starts); ``contact`` the collision
+        signal (None: measured in the state reached, by the batch's rule).
+        """
         if not starting:
             el.time += outcome.duration
             el.step += 1
         if self.clock.kind == "continuous":
             el.people_t = el.time
         el.people_xyz = None
-        el.heading, el.elevation, el.view_index = self.view(outcome.heading, elevation)
-        el.navigable = el.table.candidates(
-            outcome.viewpoint, el.heading, el.elevation, self.cfg.cos_half_hfov()
+        if heading is None or outcome.heading != heading:
+            heading, elevation, index = self.view(outcome.heading, elevation)
+        el.heading, el.elevation, el.view_index = heading, elevation, index
+        el.navigable = navigable = el.table.candidates(
+            outcome.viewpoint, heading, elevation, self._cos_fov
         )
-        contact = self._contact(el, outcome) if len(el.crowd) else NO_PROXIMITY
-        if starting and el.film is not None:
-            el.film.tick(el.time)
-        rgb, depth, mask, semantic, instance = self._images(el)
+        if contact is None:
+            contact = self._contact(el, outcome)
+        if self._blank is None:
+            if starting and el.film is not None:
+                el.film.tick(el.time)
+            rgb, depth, mask, semantic, instance = self._images(el)
+        else:
+            (rgb, depth), mask, semantic, instance = self._blank, None, None, None
         el.state = SimState(
             el.table.scan_id,
             el.step,
             rgb,
             depth,
-            el.navigable[0],
-            el.heading,
-            el.elevation,
-            el.view_index,
-            el.navigable,
+            navigable[0],
+            heading,
+            elevation,
+            index,
+            navigable,
             el.time,
             int(contact.crushed),
             contact.people,
@@ -240,10 +316,11 @@ class Batch:
         )
 
     def _contact(self, el: Element, outcome: Outcome) -> Proximity:
-        """The collision signal of the state just reached, by the batch's rule."""
+        """The collision signal of the state just reached, by a rule measuring in states.
+
+        (A rule measuring along actions is computed for the whole batch: :meth:`_settle_all`.)
+        """
         rule = self.rule
-        if rule.check == "action":
-            return knots_proximity(el.crowd, outcome.knots, rule.threshold)
         if rule.distance == "camera_3d":
             camera = el.navigable[0].position
             return state_proximity(self.collision_points(el), camera, rule.threshold)

@@ -14,6 +14,12 @@ through the agent's path mid-action is caught. Only people whose whole pelvis tr
 (:meth:`Crowd.footprint`) comes within :data:`NEAR_M` of the track are sampled; the smallest
 distance reported is exact below ``NEAR_M`` and ``inf`` above.
 
+The signal runs on every action, so it is computed as a lookup: a crowd that offers
+``pelvis_table()`` (the humans package's does, see :mod:`havln_mj.humans.tracks`) has its
+people's pelvis tracks tabulated once and read at all of an action's samples, for all people
+and all of a batch's tracks among them, in one vectorised pass; who is near a straight track
+is remembered (:class:`NearMemo`). Other crowds are asked for :meth:`Crowd.positions`.
+
 HA3D measured otherwise (see :mod:`havln_mj.sim.rules`): only in each state, in 3-D from the
 agent's camera to one tracked point per person (:func:`ha3d_points`,
 :func:`state_proximity`).
@@ -21,11 +27,10 @@ agent's camera to one tracked point per person (:func:`ha3d_points`,
 
 from __future__ import annotations
 
-import itertools
 import math
+import weakref
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 import numpy as np
 
@@ -114,8 +119,7 @@ NO_CROWD: Crowd = _NoCrowd()
 """The crowd of a scene without people."""
 
 
-@dataclass(frozen=True)
-class Proximity:
+class Proximity(NamedTuple):
     """How close an action brought the agent to people.
 
     Attributes:
@@ -133,6 +137,25 @@ class Proximity:
 NO_PROXIMITY = Proximity(False, (), math.inf)
 
 
+_STEPS = np.arange(4096, dtype=float)  # sample indices, for sample times
+
+
+def _linspace(t0: float, t1: float, n: int, extra: Sequence[float] = ()) -> np.ndarray:
+    """``numpy.linspace(t0, t1, n)`` (the same values) then ``extra``, in one array.
+
+    Without linspace's argument handling and a concatenation: this runs on every action.
+    """
+    if n > len(_STEPS):
+        return np.concatenate([np.linspace(t0, t1, n), extra])
+    times = np.empty(n + len(extra))
+    np.multiply(_STEPS[:n], (t1 - t0) / (n - 1), out=times[:n])
+    times[:n] += t0
+    times[n - 1] = t1
+    if extra:
+        times[n:] = extra
+    return times
+
+
 def sample_knots(knots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Times and positions along a track given by its knots, at :data:`SAMPLE_HZ` or faster.
 
@@ -148,18 +171,30 @@ def sample_knots(knots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if len(knots) == 1 or t[-1] <= t[0]:
         return t[-1:], knots[-1:, 1:]
     n = max(2, math.ceil((t[-1] - t[0]) * SAMPLE_HZ) + 1)
-    times = np.union1d(t, np.linspace(t[0], t[-1], n))
+    times = np.union1d(t, _linspace(float(t[0]), float(t[-1]), n))
     positions = np.column_stack([np.interp(times, t, knots[:, i]) for i in (1, 2, 3)])
     return times, positions
 
 
 def _near(crowd: Crowd, path: np.ndarray, reach: float) -> list[int]:
     """Indices of people whose pelvis track comes within ``reach`` of the polyline ``path``."""
+    return _near_rows(crowd, [(0.0, float(p[0]), float(p[1])) for p in path], reach)
+
+
+def _near_rows(crowd: Crowd, rows: Sequence[Sequence[float]], reach: float) -> list[int]:
+    """As :func:`_near`, for the polyline through knots ``(t, x, y, ...)``."""
     centres, radii = crowd.footprint()
-    legs = [
-        (float(a[0]), float(a[1]), float(b[0]) - float(a[0]), float(b[1]) - float(a[1]))
-        for a, b in itertools.pairwise(path)
-    ] or [(float(path[0][0]), float(path[0][1]), 0.0, 0.0)]
+    ax, ay = rows[0][1], rows[0][2]
+    legs = []
+    for row in rows[1:]:
+        bx, by = row[1], row[2]
+        if bx != ax or by != ay:
+            legs.append((ax, ay, bx - ax, by - ay))
+            ax, ay = bx, by
+    if not legs:
+        legs.append((ax, ay, 0.0, 0.0))
+    if len(radii) > _VECTOR_NEAR:
+        return _near_vector(centres, radii, legs, reach)
     out = []
     # Plain floats: a handful of people is faster this way than through numpy.
     for k, ((cx, cy), r) in enumerate(zip(centres.tolist(), radii.tolist(), strict=True)):
@@ -171,6 +206,19 @@ def _near(crowd: Crowd, path: np.ndarray, reach: float) -> list[int]:
                 out.append(k)
                 break
     return out
+
+
+_VECTOR_NEAR = 8  # more people than this are pruned with numpy
+
+
+def _near_vector(centres: np.ndarray, radii: np.ndarray, legs: list, reach: float) -> list[int]:
+    legs_a = np.asarray(legs, float)  # (L, 4): ax, ay, dx, dy
+    rel = centres[:, None, :] - legs_a[None, :, :2]  # (P, L, 2)
+    d = legs_a[:, 2:]
+    length2 = (d * d).sum(axis=1)
+    t = np.clip((rel * d).sum(axis=2) / np.where(length2 > 0, length2, 1.0), 0.0, 1.0)
+    gap = np.hypot(*(rel - t[..., None] * d).transpose(2, 0, 1)).min(axis=1) - radii
+    return np.flatnonzero(gap <= reach).tolist()
 
 
 def knots_proximity(
@@ -186,14 +234,121 @@ def knots_proximity(
             row: an instant, e.g. an episode's start state).
         distance: Collision threshold (metres, horizontal).
     """
-    if len(crowd) == 0:
-        return NO_PROXIMITY
-    knots = np.asarray(knots, float).reshape(-1, 4)
-    near = _near(crowd, knots[:, 1:], max(NEAR_M, distance))
-    if not near:
-        return NO_PROXIMITY
-    times, positions = sample_knots(knots)
-    return track_proximity(crowd, times, positions, distance, near)
+    return batch_proximity([(crowd, knots)], distance)[0]
+
+
+class NearMemo:
+    """Remembers who is near each straight track met before, per crowd.
+
+    A point body walks the graph's edges, so the same few hundred straight tracks come back
+    all the time; which people come within reach of one depends only on its two ends and the
+    people's footprints. Long tracks (a robot's) are not remembered.
+    """
+
+    LIMIT = 1 << 16  # tracks remembered per crowd
+
+    def __init__(self) -> None:
+        self._seen: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+    def near(self, crowd: Crowd, rows: Sequence[Sequence[float]], reach: float) -> list[int]:
+        """:func:`_near_rows`, remembered for straight tracks of up to three knots."""
+        n = len(rows)
+        a, b = rows[0], rows[-1]
+        if n > 3 or (n == 3 and (rows[1][1] != b[1] or rows[1][2] != b[2])):
+            return _near_rows(crowd, rows, reach)
+        seen = self._seen.get(crowd)
+        if seen is None:
+            seen = self._seen[crowd] = {}
+        key = (reach, a[1], a[2], b[1], b[2])
+        near = seen.get(key)
+        if near is None:
+            near = _near_rows(crowd, rows, reach)
+            if len(seen) < self.LIMIT:
+                seen[key] = near
+        return near
+
+
+def batch_proximity(
+    tracks: Sequence[tuple[Crowd, np.ndarray | Sequence[Sequence[float]]]],
+    distance: float = COLLISION_DISTANCE,
+    memo: NearMemo | None = None,
+) -> list[Proximity]:
+    """The collision signal of several tracks (a batch's actions) at once.
+
+    Each ``(crowd, knots)`` is answered as :func:`knots_proximity` answers it. Tracks among
+    the same people whose crowd offers a tabulated pelvis track (``pelvis_table()``, see
+    :mod:`havln_mj.humans.tracks`) are sampled together in one vectorised pass; other crowds
+    are asked for positions track by track. ``memo`` remembers who is near which track.
+    """
+    out = [NO_PROXIMITY] * len(tracks)
+    reach = max(NEAR_M, distance)
+    groups: dict[int, tuple[Crowd, list]] = {}
+    for slot, (crowd, knots) in enumerate(tracks):
+        if not len(crowd):
+            continue
+        rows = knots if isinstance(knots, tuple | list) else np.asarray(knots, float).tolist()
+        near = memo.near(crowd, rows, reach) if memo else _near_rows(crowd, rows, reach)
+        if near:
+            groups.setdefault(id(crowd), (crowd, []))[1].append((slot, rows, near))
+    for crowd, items in groups.values():
+        table = getattr(crowd, "pelvis_table", None)
+        if table is None:
+            for slot, rows, near in items:
+                times, positions = sample_knots(np.asarray(rows, float).reshape(-1, 4))
+                out[slot] = track_proximity(crowd, times, positions, distance, near)
+        else:
+            _tabulated(table(), items, distance, out)
+    return out
+
+
+def _samples(rows: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
+    """Sample times of a track (as :func:`sample_knots`, unordered) and its ``x + iy`` then."""
+    t0, t1 = rows[0][0], rows[-1][0]
+    if len(rows) == 1 or t1 <= t0:
+        last = rows[-1]
+        return np.array([t1]), np.array([complex(last[1], last[2])])
+    n = max(2, math.ceil((t1 - t0) * SAMPLE_HZ) + 1)
+    times = _linspace(t0, t1, n, [r[0] for r in rows[1:-1]])  # inner knots are samples too
+    knot_t = np.array([r[0] for r in rows])
+    knot_xy = np.array([complex(r[1], r[2]) for r in rows])
+    return times, np.interp(times, knot_t, knot_xy)
+
+
+def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> None:
+    """The signal of ``items`` ``(slot, knots, near)`` among one crowd, read from its table.
+
+    The people near any of the tracks are measured along all of them in one pass: people the
+    pruning left out of a track are farther than :data:`NEAR_M` from it, so measuring them
+    changes neither its flags nor its reported distance.
+    """
+    if len(items) == 1:
+        _, rows, people = items[0]
+        times, agent = _samples(rows)
+        earliest, starts = rows[0][0], None
+    else:
+        parts = [_samples(rows) for _, rows, _ in items]
+        times = np.concatenate([p[0] for p in parts])
+        agent = np.concatenate([p[1] for p in parts])
+        starts = np.cumsum([0] + [len(p[0]) for p in parts[:-1]])
+        earliest = min(rows[0][0] for _, rows, _ in items)
+        people = sorted(set().union(*(near for _, _, near in items)))
+    # Few people: all of them (no subset to look up); many: those near.
+    who = None if table.size <= _VECTOR_NEAR else people
+    gap = table.xy(times, earliest, who)  # (people, samples)
+    gap -= agent
+    d = np.abs(gap)
+    if starts is None:
+        closest = [d.min(axis=1).tolist()]
+    else:
+        closest = np.minimum.reduceat(d, starts, axis=1).T.tolist()
+    index = range(table.size) if who is None else who
+    for (slot, _, _), row in zip(items, closest, strict=True):
+        smallest = min(row)
+        if smallest <= distance:
+            hit = tuple([k for k, v in zip(index, row, strict=True) if v <= distance])
+            out[slot] = Proximity(True, hit, smallest if smallest < NEAR_M else math.inf)
+        elif smallest < NEAR_M:
+            out[slot] = Proximity(False, (), smallest)
 
 
 def track_proximity(

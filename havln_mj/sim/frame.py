@@ -17,15 +17,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
 from havln_mj import groups
 from havln_mj.errors import HavlnError, RenderingUnavailableError
-from havln_mj.humans.drawing import PeopleDrawing
-from havln_mj.render.camera import Camera
 from havln_mj.sim.crowd import Crowd
+
+if TYPE_CHECKING:
+    from havln_mj.render.camera import Camera
 
 
 @dataclass(frozen=True)
@@ -91,6 +93,9 @@ class Frames:
     def __init__(self, model: mujoco.MjModel, crowd: Crowd, style: str = "pieces") -> None:
         self.model = model
         self.crowd = crowd
+        # Drawing people and cameras: imported when a world is rendered, not with the simulator.
+        from havln_mj.humans.drawing import PeopleDrawing
+
         self._poser = PeopleDrawing(crowd, style).poser(model)
         self._human_geoms = model.geom_group == groups.HUMANS
         self._cameras: dict[str, tuple[Camera, ViewSettings]] = {}
@@ -141,6 +146,8 @@ class Frames:
         return cam
 
     def _new_camera(self, name: str, settings: ViewSettings) -> Camera:
+        from havln_mj.render.camera import Camera  # rendering: not imported with the simulator
+
         vis = self.model.vis.global_
         buffer = (int(vis.offwidth), int(vis.offheight))
         try:
@@ -192,18 +199,28 @@ class Frames:
             shot = render_skybox_frame(self.model, data, cam, *skybox)
             rgb, depth, mask = shot.rgb, shot.depth, shot.people
             depth = depth if settings.depth else None
+            hidden = False
         else:
-            frame = cam.render(data, rgb=True, depth=settings.depth)
-            rgb, depth = frame.rgb, frame.depth
-        if settings.labels:
-            from havln_mj.render.labels import PERSON, render_labels
+            # People out of this camera's view are left out of its scene (the same image).
+            hidden = self._poser.hide_unseen(
+                data, self.model.camera(camera).id, settings.width / settings.height
+            )
+        try:
+            if skybox is None:
+                frame = cam.render(data, rgb=True, depth=settings.depth)
+                rgb, depth = frame.rgb, frame.depth
+            if settings.labels:
+                from havln_mj.render.labels import PERSON, render_labels
 
-            labels = render_labels(self.model, data, cam)
-            semantic, instance = labels.semantic, labels.instance
-            mask = semantic == PERSON if mask is None else mask
-        elif settings.human_mask and mask is None:
-            ids = cam.render_geom_ids(data)
-            mask = (ids >= 0) & self._human_geoms[np.maximum(ids, 0)]
+                labels = render_labels(self.model, data, cam)
+                semantic, instance = labels.semantic, labels.instance
+                mask = semantic == PERSON if mask is None else mask
+            elif settings.human_mask and mask is None:
+                ids = cam.render_geom_ids(data)
+                mask = (ids >= 0) & self._human_geoms[np.maximum(ids, 0)]
+        finally:
+            if hidden:
+                self._poser.show_all()
         return View(rgb, depth, mask if settings.human_mask else None, semantic, instance)
 
     def close(self) -> None:

@@ -26,6 +26,8 @@ from havln_mj.scene.scan import Scan
 from havln_mj.sim.body import Film, Outcome, ignore
 from havln_mj.sim.crowd import Crowd
 from havln_mj.sim.frame import Frames, View, ViewSettings
+from havln_mj.sim.memory import release_free_memory
+from havln_mj.sim.navigation import camera_positions
 from havln_mj.sim.world import WorldOptions, build_world
 
 log = logging.getLogger(__name__)
@@ -45,6 +47,7 @@ class Stage:
         self.data = mujoco.MjData(self.world.model)
         self.frames = Frames(self.world.model, crowd, options.people_style)
         self.rig = PointBody(np.zeros(3))
+        release_free_memory()  # what compiling the world allocated and freed
 
     def place(self, pose: tuple) -> None:
         """Writes the rig's pose ``(position, heading, elevation)`` into the data."""
@@ -141,6 +144,7 @@ class GraphPointBody:
     __slots__ = (
         "_drawn",
         "_kind",
+        "_xyz",
         "crowd",
         "elevation",
         "graph",
@@ -154,6 +158,7 @@ class GraphPointBody:
     def __init__(self, kind: PointKind, scan_id: str, graph: NavGraph, crowd: Crowd) -> None:
         self._kind = kind
         self.scan_id, self.graph, self.crowd = scan_id, graph, crowd
+        self._xyz = camera_positions(graph)
         self.viewpoint = ""
         self.xyz = (0.0, 0.0, 0.0)
         self.heading = self.elevation = 0.0
@@ -163,11 +168,12 @@ class GraphPointBody:
     def start(self, viewpoint: str, heading: float, elevation: float, t: float) -> Outcome:
         """Places the rig at ``viewpoint`` (an instant)."""
         self.viewpoint = viewpoint
-        self.xyz = tuple(float(c) for c in self.graph.position(viewpoint))
+        self.xyz = self._xyz[viewpoint]
         self.heading, self.elevation = heading, elevation
         self._drawn = None
         knots = ((t, *self.xyz),)
-        self.observe(knots)
+        if self.observe is not ignore:
+            self.observe(knots)
         return Outcome(0.0, knots, viewpoint, heading)
 
     def move(
@@ -181,27 +187,27 @@ class GraphPointBody:
     ) -> Outcome:
         """Moves straight to ``target``, then turns to ``heading``/``elevation``."""
         here = self.xyz
-        there = here if target == self.viewpoint else self._position(target)
-        move_s = math.dist(here, there) / self._kind.speed
+        there = here if target == self.viewpoint else self._xyz[target]
+        kind = self._kind
+        move_s = math.dist(here, there) / kind.speed
         turn = max(abs(wrap_angle(heading - self.heading)), abs(elevation - self.elevation))
-        duration = move_s + turn / self._kind.turn_rate
+        duration = move_s + turn / kind.turn_rate
         if duration == 0.0:
             duration = wait_s
-        knots = [(t, *here)]
-        if move_s > 0.0:
-            knots.append((t + move_s, *there))
-        if duration > move_s:
-            knots.append((t + duration, *there))
-        self.observe(knots)  # people react to the move they see coming, frames included
+        if move_s > 0.0 and duration > move_s:
+            knots = ((t, *here), (t + move_s, *there), (t + duration, *there))
+        elif move_s > 0.0 or duration > 0.0:
+            knots = ((t, *here), (t + duration, *there))
+        else:
+            knots = ((t, *here),)
+        if self.observe is not ignore:
+            self.observe(knots)  # people react to the move they see coming, frames included
         if film is not None:
             self._film(film, t, move_s, duration, here, there, heading, elevation)
         self.viewpoint, self.xyz = target, there
         self.heading, self.elevation = heading, elevation
         self._drawn = None
         return Outcome(duration, knots, target, heading)
-
-    def _position(self, vp: str) -> tuple[float, float, float]:
-        return tuple(float(c) for c in self.graph.position(vp))
 
     def _film(self, film, t0, move_s, duration, here, there, heading, elevation) -> None:
         """Draws the action's frames: along the move, then through the turn."""

@@ -5,10 +5,16 @@ navigation-graph folder, in every mode, so navigable locations never depend on r
 scan itself (the user's mesh, else a graph proxy) is loaded only when something needs its
 geometry (rendering, a legged body). All 90 real graphs load in a second. A procedural id
 (``proc-<seed>``) or a scan folder goes through ``load_scan`` for its graph too.
+
+Graphs are shared by the simulators of a process, as MatterSim shares its: a navigation table
+(the graph and what queries on it remember) is keyed by its connectivity file, as it is on
+disk, and kept while any simulator uses it.
 """
 
 from __future__ import annotations
 
+import weakref
+from collections.abc import Callable
 from pathlib import Path
 
 from havln_mj.errors import UnknownScanError, UnknownSceneError, did_you_mean
@@ -16,6 +22,7 @@ from havln_mj.scene.ids import parse_scene_id
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.realscan import CONNECTIVITY_HOW_TO, resolve_connectivity_dir
 from havln_mj.scene.scan import Scan, known_scene_ids, load_scan
+from havln_mj.scene.scanfolder import CONNECTIVITY
 from havln_mj.sim.navigation import NavTable
 
 
@@ -53,10 +60,10 @@ class SceneLibrary:
         """
         table = self._tables.get(scan_id)
         if table is None:
-            table = self._tables[scan_id] = NavTable(scan_id, self._graph(scan_id))
+            table = self._tables[scan_id] = self._table(scan_id)
         return table
 
-    def _graph(self, scan_id: str) -> NavGraph:
+    def _table(self, scan_id: str) -> NavTable:
         known = self.connectivity_ids()
         try:
             sid = parse_scene_id(scan_id, known + known_scene_ids())
@@ -70,8 +77,9 @@ class SceneLibrary:
                     f"unknown scan {scan_id!r}: {where} (setNavGraphPath). "
                     f"Graphs: {CONNECTIVITY_HOW_TO}.{did_you_mean(scan_id, known)}"
                 )
-            return NavGraph.from_file(path)
-        return self.scan(scan_id).graph
+            return _shared(scan_id, path, lambda: NavGraph.from_file(path))
+        scan = self.scan(scan_id)
+        return _shared(scan_id, scan.folder / CONNECTIVITY, lambda: scan.graph)
 
     def scan(self, scan_id: str) -> Scan:
         """The loaded scan (built and cached on first use)."""
@@ -83,3 +91,20 @@ class SceneLibrary:
                 raise UnknownScanError(str(exc)) from None
             self._scans[scan_id] = scan
         return scan
+
+
+def _shared(scan_id: str, path: Path, graph: Callable[[], NavGraph]) -> NavTable:
+    """The process's table of the graph in ``path`` (made from ``graph()`` if none is alive).
+
+    Keyed by the file as it is now (its path, size and modification time), so a rewritten
+    file is read again.
+    """
+    stat = path.stat()
+    key = (scan_id, str(path.resolve()), stat.st_size, stat.st_mtime_ns)
+    table = _TABLES.get(key)
+    if table is None:
+        table = _TABLES[key] = NavTable(scan_id, graph())
+    return table
+
+
+_TABLES: weakref.WeakValueDictionary[tuple, NavTable] = weakref.WeakValueDictionary()

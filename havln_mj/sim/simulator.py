@@ -53,8 +53,7 @@ from havln_mj.frames import TWO_PI
 from havln_mj.robot.point_body import DEFAULT_SPEED, DEFAULT_TURN_RATE
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.sim.actions import (
-    check_delta,
-    check_index,
+    check_graph_steps,
     check_robot_action,
     per_element,
 )
@@ -297,14 +296,14 @@ class Simulator(SimulatorSettings, SimulatorExtensions):
         """
         t0 = time.perf_counter()
         elements = self._running()
-        indices = self._per_element("index", index)
-        dhs = self._per_element("heading", heading)
-        des = self._per_element("elevation", elevation)
-        actions = [
-            (i, check_index(i, el.navigable, k), check_delta(i, dh), check_delta(i, de))
-            for i, (el, k, dh, de) in enumerate(zip(elements, indices, dhs, des, strict=True))
-        ]
-        self._batch.apply(actions)
+        n = self._cfg.batch_size
+        steps = check_graph_steps(
+            elements,
+            per_element("index", index, n),
+            per_element("heading", heading, n),
+            per_element("elevation", elevation, n),
+        )
+        self._batch.apply(steps)
         self._timers["process"] += time.perf_counter() - t0
 
     def makeEgoAction(self, action: Sequence[EgoAction | int | str]) -> None:  # noqa: N802

@@ -17,16 +17,13 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
-import trimesh
 
 from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
-from havln_mj.humans.body import BodyShape
-from havln_mj.humans.mujoco_people import DRAW_STYLES, add_people
-from havln_mj.humans.skinned import Skin
 from havln_mj.render.labels import add_label_meshes, label_people
 from havln_mj.robot.point_body import add_point_body
 from havln_mj.scene.collision import CoacdParams, decompose
@@ -34,6 +31,12 @@ from havln_mj.scene.matterport.labelmesh import scan_label_meshes
 from havln_mj.scene.mesh import merge_by_look
 from havln_mj.scene.scan import Scan, floor_heights
 from havln_mj.sim.visual import add_visual_parts, safe_name
+
+if TYPE_CHECKING:
+    import trimesh
+
+    from havln_mj.humans.body import BodyShape
+    from havln_mj.humans.skinned import Skin
 
 COLLISION_MODES = ("auto", "boxes", "coacd", "none")
 """How a world's collision geometry can be made, ``auto`` (exact boxes where the scan has them,
@@ -70,6 +73,8 @@ class WorldOptions:
             raise InvalidArgumentError(
                 f"collision mode {self.collision!r} unknown; valid: {', '.join(COLLISION_MODES)}"
             )
+        from havln_mj.humans.mujoco_people import DRAW_STYLES  # people: not on import
+
         if self.people_style not in DRAW_STYLES:
             raise InvalidArgumentError(
                 f"people style {self.people_style!r} unknown; valid: {', '.join(DRAW_STYLES)}"
@@ -117,6 +122,8 @@ def _add_boxes(spec: mujoco.MjSpec, scan: Scan) -> int:
 
 def _slice_box(mesh: trimesh.Trimesh, lo: np.ndarray, hi: np.ndarray) -> trimesh.Trimesh:
     """The part of ``mesh`` inside the axis-aligned box [lo, hi] (open cuts, no caps)."""
+    import trimesh  # a large import: only when a mesh is decomposed
+
     for axis in range(3):
         for sign, value in ((1.0, lo[axis]), (-1.0, hi[axis])):
             normal = np.zeros(3)
@@ -259,6 +266,8 @@ def build_world(
     Returns:
         The compiled world.
     """
+    from havln_mj.humans.mujoco_people import add_people  # people: not on import
+
     t0 = time.perf_counter()
     options = options or WorldOptions()
     spec, mode, n = world_spec(scan, options)

@@ -6,6 +6,7 @@ import io
 import logging
 from pathlib import Path
 
+import coacd
 import mujoco
 import numpy as np
 import pytest
@@ -70,15 +71,15 @@ def _own_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 
 @pytest.fixture
 def coacd_calls(monkeypatch: pytest.MonkeyPatch) -> list[int]:
-    """Counts calls to coacd.run_coacd as seen from the collision module."""
+    """Counts calls to coacd.run_coacd (the collision module imports coacd when it runs)."""
     calls: list[int] = []
-    real = collision.coacd.run_coacd
+    real = coacd.run_coacd
 
     def counting(*args, **kwargs):
         calls.append(1)
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(collision.coacd, "run_coacd", counting)
+    monkeypatch.setattr(coacd, "run_coacd", counting)
     return calls
 
 
@@ -378,7 +379,7 @@ def test_parameters_the_installed_coacd_lacks_are_refused(monkeypatch: pytest.Mo
     def old_run_coacd(mesh, threshold=0.05, preprocess_resolution=50, seed=0):  # no real_metric
         raise AssertionError("not called")
 
-    monkeypatch.setattr(collision.coacd, "run_coacd", old_run_coacd)
+    monkeypatch.setattr(coacd, "run_coacd", old_run_coacd)
     with pytest.raises(InvalidArgumentError, match=r"real_metric=True.*upgrade coacd"):
         CoacdParams().coacd_kwargs()
     kwargs = CoacdParams(real_metric=False, threshold=0.05).coacd_kwargs()

@@ -2,10 +2,26 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
-from havln_mj.sim.crowd import SAMPLE_HZ, knots_proximity, sample_knots
+from havln_mj.humans.clip import Clip
+from havln_mj.humans.crowd import Crowd, Person
+from havln_mj.humans.population import populate
+from havln_mj.scene.scan import load_scan
+from havln_mj.sim.crowd import (
+    NEAR_M,
+    SAMPLE_HZ,
+    NearMemo,
+    Proximity,
+    _near,
+    batch_proximity,
+    knots_proximity,
+    sample_knots,
+    track_proximity,
+)
 
 # An L-shaped route: 3 m east, then 4 m north (7 m), walked from t = 10 s in 7 s, then a 1 s
 # turn in place.
@@ -51,3 +67,74 @@ def test_the_signal_follows_the_route_not_the_line_between_its_ends(standing):
     # People farther than NEAR_M from every leg are not even sampled.
     far = knots_proximity(standing([[10.0, -5.0, 0.5]]), _KNOTS)
     assert not far.crushed and far.min_distance == np.inf
+
+
+def _direct(crowd, knots, distance=1.0):
+    """The signal computed from the crowd's own positions, sample by sample."""
+    knots = np.asarray(knots, float).reshape(-1, 4)
+    near = _near(crowd, knots[:, 1:], max(NEAR_M, distance))
+    if not near:
+        return Proximity(False, (), np.inf)
+    times, positions = sample_knots(knots)
+    return track_proximity(crowd, times, positions, distance, near)
+
+
+def _people_of_every_kind():
+    """People by HA3D's rule in proc-1 (walkers, people sitting down then seated, idlers)
+    plus one whose clip does not loop (held at its last frame) and one of a single frame."""
+    scan = load_scan("proc-1")
+    people = [p for seed in (1, 3) for p in populate(scan, np.random.default_rng(seed)).people]
+    spot = scan.graph.position(scan.graph.nodes[0]) - [0.0, 0.0, 1.2]
+    root = np.zeros((40, 3))
+    root[:, 0] = np.linspace(0.0, 1.5, 40)
+    walk_once = Clip(root, 30.0, positions=np.zeros((40, 24, 3)), loop_start=39, name="once")
+    still = Clip(root[:1], 30.0, positions=np.zeros((1, 24, 3)), name="still")
+    shape = people[0].shape
+    people += [
+        Person(shape, walk_once, spot, 0.3, "once", start=0.2),
+        Person(shape, still, spot + np.array([1.0, 0.0, 0.0]), 0.0, "still"),
+    ]
+    return scan.graph, Crowd(people)
+
+
+def _random_action(graph, rng):
+    """A point body's knots: an edge walked at 1 m/s then a turn, a wait, or an instant."""
+    a, b, _ = graph.edges()[int(rng.integers(graph.num_edges))]
+    if rng.random() < 0.5:
+        a, b = b, a
+    pa, pb = graph.position(a), graph.position(b)
+    t0 = float(rng.choice([rng.uniform(0.0, 3.0), rng.uniform(0.0, 300.0)]))
+    kind = rng.random()
+    if kind < 0.05:
+        return ((t0, *pa),)
+    if kind < 0.15:
+        return ((t0, *pa), (t0 + float(rng.uniform(0.1, 4.0)), *pa))
+    move = float(np.linalg.norm(pb - pa))
+    turn = float(rng.uniform(0.0, 2.0)) if rng.random() < 0.8 else 0.0
+    knots = [(t0, *pa), (t0 + move, *pb)]
+    if turn > 0:
+        knots.append((t0 + move + turn, *pb))
+    return tuple(tuple(float(v) for v in k) for k in knots)
+
+
+def test_the_tabulated_signal_matches_the_direct_one_on_10000_actions():
+    graph, crowd = _people_of_every_kind()
+    rng = np.random.default_rng(0)
+    actions = [_random_action(graph, rng) for _ in range(10_000)]
+    memo = NearMemo()
+    batched = []
+    for k in range(0, len(actions), 8):  # batches of 8 tracks among the same people
+        batched += batch_proximity([(crowd, a) for a in actions[k : k + 8]], 1.0, memo)
+    crushed = finite = 0
+    for knots, fast in zip(actions, batched, strict=True):
+        slow = _direct(crowd, knots)
+        assert knots_proximity(crowd, knots) == fast
+        assert (fast.crushed, fast.people) == (slow.crushed, slow.people), knots
+        if math.isinf(slow.min_distance):
+            assert math.isinf(fast.min_distance), knots
+        else:
+            assert abs(fast.min_distance - slow.min_distance) < 1e-3, knots
+            finite += 1
+        crushed += slow.crushed
+    # The comparison covers many passes near people, collisions included, and far ones.
+    assert crushed > 1000 and 3000 < finite < 9000

@@ -17,7 +17,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from havln_mj.humans import rotations as rot
 from havln_mj.humans.clip import Clip
@@ -43,15 +42,47 @@ PELVIS_YAW = math.radians(3.8)
 ARM_ARC = math.radians(30.0)  # total arc of each arm at normal speed
 
 
-def _foot_pitch_spline() -> CubicSpline:
+class PeriodicSpline:
+    """The periodic cubic spline through ``(x, y)`` (``y[-1] == y[0]``), C² all round.
+
+    What ``scipy.interpolate.CubicSpline(x, y, bc_type="periodic")`` computes (the same
+    unique curve, to rounding), in a few lines of numpy: gait needs one small spline, and
+    scipy's interpolation package is a large import.
+    """
+
+    def __init__(self, x: np.ndarray, y: np.ndarray) -> None:
+        x, y = np.asarray(x, float), np.asarray(y, float)
+        h = np.diff(x)
+        n = len(h)
+        slope = np.diff(y) / h
+        # Second derivatives m_i at x_0..x_{n-1} (m_n = m_0): a cyclic tridiagonal system.
+        a = np.zeros((n, n))
+        i = np.arange(n)
+        a[i, i] = 2.0 * (h + np.roll(h, 1))
+        a[i, (i + 1) % n] += h
+        a[i, (i - 1) % n] += np.roll(h, 1)
+        m = np.linalg.solve(a, 6.0 * (slope - np.roll(slope, 1)))
+        m1 = np.roll(m, -1)
+        self._x, self._period = x, x[-1] - x[0]
+        self._coef = (y[:-1], slope - h * (2.0 * m + m1) / 6.0, m / 2.0, (m1 - m) / (6.0 * h))
+
+    def __call__(self, u: np.ndarray) -> np.ndarray:
+        """Values at ``u`` (any shape; outside the knots the curve repeats)."""
+        x = self._x
+        u = x[0] + np.mod(np.asarray(u, float) - x[0], self._period)
+        k = np.clip(np.searchsorted(x, u, side="right") - 1, 0, len(x) - 2)
+        t = u - x[k]
+        y0, b, c, d = (c[k] for c in self._coef)
+        return y0 + t * (b + t * (c + t * d))
+
+
+def _foot_pitch_spline() -> PeriodicSpline:
     # The foot's angle to the floor is the sum of the sagittal joint angles down the leg;
     # the offset makes it zero on average while the foot is flat (20–50 %).
     pitch = _HIP_FLEX - _KNEE_FLEX + _ANKLE_DF
     flat = (_CYCLE_PCT >= 20) & (_CYCLE_PCT <= 50)
     pitch = np.radians(pitch - pitch[flat].mean())
-    return CubicSpline(
-        np.append(_CYCLE_PCT, 100) / 100.0, np.append(pitch, pitch[0]), bc_type="periodic"
-    )
+    return PeriodicSpline(np.append(_CYCLE_PCT, 100) / 100.0, np.append(pitch, pitch[0]))
 
 
 FOOT_PITCH = _foot_pitch_spline()

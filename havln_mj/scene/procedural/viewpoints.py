@@ -11,16 +11,17 @@ of sight between the two camera positions.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components, dijkstra
-from scipy.spatial import cKDTree
 
 from havln_mj.scene.boxes import BoxSet, body_sweep_blocked, segments_hit_boxes
 from havln_mj.scene.procedural.furnish import Item
 from havln_mj.scene.procedural.layout import FloorPlan, Room
 from havln_mj.scene.procedural.recipe import Recipe
+
+if TYPE_CHECKING:
+    from scipy.sparse import csr_matrix
 
 _DOOR_OFFSET = 0.7  # door viewpoints stand this far from the wall line
 _LATTICE = 0.25  # free-floor sampling step
@@ -103,6 +104,9 @@ def _dense_graph(
     recipe: Recipe, door_pts: np.ndarray, lattice: np.ndarray, boxes: BoxSet
 ) -> csr_matrix:
     """Walkable links between neighbouring lattice points and from door points (first)."""
+    from scipy.sparse import csr_matrix  # scipy: only while a house is generated
+    from scipy.spatial import cKDTree
+
     dense = np.vstack([door_pts.reshape(-1, 2), lattice])
     tree = cKDTree(dense)
     near_pairs = tree.query_pairs(1.5 * _LATTICE, output_type="ndarray")
@@ -129,6 +133,8 @@ def room_is_passable(
     Returns:
         True when all door points and most of the free floor form one walkable piece.
     """
+    from scipy.sparse.csgraph import connected_components  # scipy: only while generating
+
     feet = _footprints(items)
     door_pts, door_rooms = _door_points(recipe, plan, feet)
     mine = np.array([r == room.index for r in door_rooms], dtype=bool)
@@ -177,6 +183,8 @@ def _edges(
     pairs: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Pairs (i < j) closer than ``max_len`` whose body sweep is clear, with their lengths."""
+    from scipy.spatial import cKDTree  # scipy: only while a house is generated
+
     if pairs is None:
         pairs = cKDTree(floor[:, :2]).query_pairs(max_len, output_type="ndarray")
     pairs = pairs.reshape(-1, 2)
@@ -202,6 +210,8 @@ def _bridge(
     farthest route point still in clear reach of the previous one and consecutive points are
     always joined. Returns nothing when no other component is reachable.
     """
+    from scipy.sparse.csgraph import dijkstra  # scipy: only while a house is generated
+
     max_len = recipe["max_edge_length"]
     radius, z_range = recipe["body_radius"], tuple(recipe["body_z"])
     near = np.argmin(np.linalg.norm(dense[None] - pts[:, None], axis=2), axis=1)
@@ -250,6 +260,9 @@ def _candidates(
     Door pairs come first, then a Poisson-disk sample of the free floor, then bridge points
     wherever the sample leaves reachable floor disconnected.
     """
+    from scipy.sparse import csr_matrix  # scipy: only while a house is generated
+    from scipy.sparse.csgraph import connected_components
+
     feet = _footprints(items)
     door_pts, door_rooms = _door_points(recipe, plan, feet)
     lattice, lattice_rooms, clearance = _free_lattice(recipe, plan, inners, feet)
@@ -305,6 +318,9 @@ def place_viewpoints(
 
     Only the largest connected component is kept, so every viewpoint is reachable.
     """
+    from scipy.sparse import csr_matrix  # scipy: only while a house is generated
+    from scipy.sparse.csgraph import connected_components
+
     pts, rooms = _candidates(rng, recipe, plan, inners, items, boxes)
     n = len(pts)
     floor = np.column_stack([pts, np.zeros(n)])

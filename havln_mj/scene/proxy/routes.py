@@ -27,8 +27,6 @@ from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from havln_mj.cache import atomic_write_json
 from havln_mj.errors import MalformedDataError
@@ -123,6 +121,9 @@ def shortest_routes(
     Returns:
         For each wanted edge that has one, its route ``(a, ..., b)``.
     """
+    from scipy.sparse import csr_matrix  # a large import: only when routes are planned
+    from scipy.sparse.csgraph import dijkstra
+
     index = {vp: k for k, vp in enumerate(graph.nodes)}
     pos = np.array([graph.position(vp) for vp in graph.nodes]).reshape(-1, 3)
     links = {(index[a], index[b]) for a, b in walkable}

@@ -1,0 +1,68 @@
+"""Navigable locations: the bearing-window query agrees with MatterSim's rule applied directly."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from havln_mj.scene.navgraph import NavGraph
+from havln_mj.scene.scan import load_scan
+from havln_mj.sim.navigation import NavTable, camera_positions
+
+
+def _reference(graph: NavGraph, vp: str, heading: float, elevation: float, cos_fov):
+    """MatterSim's rule, neighbour by neighbour: (id, rel_heading, rel_elevation, distance)."""
+    here = graph.position(vp)
+    found = []
+    for order, j in enumerate(graph.neighbors(vp)):
+        d = graph.position(j) - here
+        flat = math.hypot(d[0], d[1])
+        rel = math.remainder(math.atan2(d[0], d[1]) - heading, 2 * math.pi)
+        rel = math.pi if rel == -math.pi else rel
+        if cos_fov is not None and (flat == 0.0 or math.cos(rel) < cos_fov):
+            continue
+        rel_e = math.atan2(d[2], flat) - elevation
+        found.append((math.hypot(rel, rel_e), order, j, rel, rel_e, float(np.linalg.norm(d))))
+    found.sort()
+    return [(vp, 0.0, 0.0, 0.0)] + [(j, r, e, dist) for _, _, j, r, e, dist in found]
+
+
+def _check(graph: NavGraph, rng: np.random.Generator, queries: int) -> int:
+    table = NavTable("scan", graph)
+    seen = 0
+    for _ in range(queries):
+        vp = graph.nodes[int(rng.integers(graph.num_nodes))]
+        fov = float(rng.choice([0.3, 0.7, 1.2, 2.5, 3.3]))  # half-widths; > π keeps all
+        cos_fov = None if rng.random() < 0.1 else math.cos(fov)
+        heading = float(rng.uniform(0.0, 2 * math.pi))
+        neighbours = graph.neighbors(vp)
+        if neighbours and rng.random() < 0.3:  # right at the edge of the field of view
+            d = graph.position(neighbours[0]) - graph.position(vp)
+            heading = (math.atan2(d[0], d[1]) + rng.choice([-fov, fov])) % (2 * math.pi)
+        elevation = float(rng.uniform(-0.9, 0.9))
+        got = table.candidates(vp, heading, elevation, cos_fov)
+        want = _reference(graph, vp, heading, elevation, cos_fov)
+        assert [v.viewpointId for v in got] == [w[0] for w in want], (vp, heading, cos_fov)
+        for v, (_, rel, rel_e, dist) in zip(got, want, strict=True):
+            assert v.rel_heading == pytest.approx(rel, abs=1e-12)
+            assert v.rel_elevation == pytest.approx(rel_e, abs=1e-12)
+            assert v.rel_distance == pytest.approx(dist, abs=1e-12)
+        assert got[0].ix == graph.index(vp)
+        assert (got[0].x, got[0].y, got[0].z) == camera_positions(graph)[vp]
+        seen += len(got) - 1
+    return seen
+
+
+def test_candidates_follow_mattersims_rule_on_procedural_houses():
+    rng = np.random.default_rng(0)
+    assert sum(_check(load_scan(f"proc-{k}").graph, rng, 600) for k in range(3)) > 500
+
+
+def test_candidates_follow_mattersims_rule_on_the_real_graphs(shared_data):
+    rng = np.random.default_rng(1)
+    files = sorted((shared_data / "mp3d_connectivity").glob("*_connectivity.json"))
+    assert len(files) == 90
+    seen = sum(_check(NavGraph.from_file(f), rng, 60) for f in files)
+    assert seen > 3000
