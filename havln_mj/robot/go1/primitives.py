@@ -23,6 +23,8 @@ from havln_mj.robot.go1 import constants as const
 from havln_mj.robot.go1.estimator import ESTIMATES, OdometryEstimator, TruthEstimator, quat_yaw
 from havln_mj.robot.go1.gains import Go1Gains, load_gains
 from havln_mj.robot.go1.gait import TrotGait
+from havln_mj.robot.go1.height_scan import HeightScan
+from havln_mj.robot.go1.terrain_gait import TerrainGait, TerrainParams
 
 OnTick = Callable[[float], None]
 MAX_DISTANCE = 10.0  # metres, per forward primitive
@@ -136,6 +138,7 @@ class Go1Body:
         prefix: str = "go1/",
         estimate: str = "truth",
         gains: Go1Gains | None = None,
+        terrain: bool = False,
     ) -> None:
         if estimate not in ESTIMATES:
             raise InvalidArgumentError(
@@ -177,11 +180,22 @@ class Go1Body:
                 model, data, self.qadr, self.dadr, self.gyro_adr, self.joint_qadr
             )
         self._truth = TruthEstimator(model, data, self.qadr, self.dadr)
-        self.gait = TrotGait(self.gains)
+        self.terrain = terrain
+        self.terrain_params = TerrainParams()
+        self.scan = HeightScan(model, data, self.trunk_id)
+        self.gait = self._new_gait()
         self.fallen = False
         self._vx = self._vy = self._wz = 0.0  # filtered measured velocity
         self._ix = self._iy = self._iw = 0.0  # velocity-loop integrals
         self.est.reset()
+
+    def _new_gait(self):
+        if self.terrain:
+            return TerrainGait(
+                self.terrain_params, self.model, self.data, self.est, self.joint_qadr,
+                self.joint_dadr, self.foot_ids, self.scan,
+            )
+        return TrotGait(self.gains)
 
     # ----------------------------------------------------------------- state
 
@@ -231,8 +245,8 @@ class Go1Body:
             0.0,
             math.sin(yaw / 2),
         )
-        self.gait = TrotGait(self.gains)
-        home = self.gait.step(0.0, 0.0, 0.0, 0.0)
+        self.gait = self._new_gait()
+        home = TrotGait(self.gains).step(0.0, 0.0, 0.0, 0.0)
         for qa, q in zip(self.joint_qadr, home, strict=True):
             d.qpos[qa] = q
         d.qvel[self.dadr : self.dadr + 6] = 0.0
@@ -240,11 +254,23 @@ class Go1Body:
             d.qvel[da] = 0.0
         self._write_ctrl(home)
         mujoco.mj_forward(m, d)
+        if self.terrain:  # stand on the ground as it is: a stair, a ramp
+            z, pitch, home = self.gait.standing_pose(x, y, yaw, z_floor + const.STAND_HEIGHT)
+            d.qpos[a + 2] = z + 0.002
+            w = (math.cos(yaw / 2), math.sin(yaw / 2))
+            p = (math.cos(pitch / 2), math.sin(pitch / 2))
+            d.qpos[a + 3 : a + 7] = (w[0] * p[0], -w[1] * p[1], w[0] * p[1], w[1] * p[0])
+            for qa, q in zip(self.joint_qadr, home, strict=True):
+                d.qpos[qa] = q
+            self._write_ctrl(home)
+            mujoco.mj_forward(m, d)
         self.fallen = False
         self._vx = self._vy = self._wz = 0.0
         self._ix = self._iy = self._iw = 0.0
         self.est.reset()
         self._truth.reset()
+        if self.terrain:
+            self.gait.reset()
         if settle > 0:
             self.stand(settle)
 
