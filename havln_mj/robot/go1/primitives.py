@@ -24,9 +24,10 @@ from havln_mj.robot.go1.estimator import ESTIMATES, OdometryEstimator, TruthEsti
 from havln_mj.robot.go1.gains import Go1Gains, load_gains
 from havln_mj.robot.go1.gait import TrotGait
 from havln_mj.robot.go1.height_scan import HeightScan
-from havln_mj.robot.go1.terrain_gait import TerrainGait, TerrainParams
+from havln_mj.robot.go1.terrain_gait import TerrainGait
 
 OnTick = Callable[[float], None]
+CONTROLLERS = ("terrain", "trot")
 MAX_DISTANCE = 10.0  # metres, per forward primitive
 MAX_TURN = 2.0 * math.pi  # radians, per turn primitive
 MAX_STAND = 600.0  # seconds
@@ -138,8 +139,12 @@ class Go1Body:
         prefix: str = "go1/",
         estimate: str = "truth",
         gains: Go1Gains | None = None,
-        terrain: bool = False,
+        controller: str = "terrain",
     ) -> None:
+        if controller not in CONTROLLERS:
+            raise InvalidArgumentError(
+                f"controller {controller!r} unknown; valid: {', '.join(CONTROLLERS)}"
+            )
         if estimate not in ESTIMATES:
             raise InvalidArgumentError(
                 f"estimate {estimate!r} unknown; valid: {', '.join(ESTIMATES)}"
@@ -180,8 +185,8 @@ class Go1Body:
                 model, data, self.qadr, self.dadr, self.gyro_adr, self.joint_qadr
             )
         self._truth = TruthEstimator(model, data, self.qadr, self.dadr)
-        self.terrain = terrain
-        self.terrain_params = TerrainParams()
+        self.controller = controller
+        self.terrain = controller == "terrain"
         self.scan = HeightScan(model, data, self.trunk_id)
         self.gait = self._new_gait()
         self.fallen = False
@@ -189,11 +194,16 @@ class Go1Body:
         self._ix = self._iy = self._iw = 0.0  # velocity-loop integrals
         self.est.reset()
 
-    def _new_gait(self):
+    def _new_gait(self) -> TrotGait | TerrainGait:
         if self.terrain:
             return TerrainGait(
-                self.terrain_params, self.model, self.data, self.est, self.joint_qadr,
-                self.joint_dadr, self.foot_ids, self.scan,
+                self.gains.terrain,
+                self.data,
+                self.est,
+                self.joint_qadr,
+                self.joint_dadr,
+                self.foot_ids,
+                self.scan,
             )
         return TrotGait(self.gains)
 
@@ -419,7 +429,7 @@ class Go1Body:
                 settle_end = d.time + (g.settle if walk else 0.0)
             if stage == "settle" and d.time >= settle_end - 1e-9:
                 break
-            if gait.walking:
+            if gait.walking and not self.terrain:  # the terrain gait holds speed itself
                 self._ix = _clip(
                     self._ix + g.ki_velocity * (vx - self._vx) * dt,
                     -g.integral_limit_velocity,
@@ -435,6 +445,7 @@ class Go1Body:
                     -g.integral_limit_yaw_rate,
                     g.integral_limit_yaw_rate,
                 )
+            if gait.walking:
                 q = gait.step(
                     dt, vx + self._ix, vy + self._iy, wz + self._iw, self._vx - vx, self._vy - vy
                 )
