@@ -27,8 +27,13 @@ def _smooth(s: float) -> float:
 
 
 def is_rough(ground: Ground, x: float, y: float, c: float, s: float, ahead, jump: float) -> bool:
-    """Whether the ground along (c, s) at distances ``ahead`` has an edge or climbs 0.1 m."""
-    hs = [ground(x + c * d, y + s * d) for d in ahead]
+    """Whether the ground along (c, s) at distances ``ahead`` has an edge or climbs 0.1 m.
+
+    Obstacles (``inf`` ground) are no terrain: they are left out.
+    """
+    hs = [h for h in (ground(x + c * d, y + s * d) for d in ahead) if h < math.inf]
+    if not hs:
+        return False
     if any(abs(b - a) > jump for a, b in itertools.pairwise(hs)):
         return True
     return max(hs) - min(hs) > 0.1
@@ -48,7 +53,7 @@ def foothold(
     """
     n = round((g.foothold_shift + g.tread_max) / SAMPLE)
     hs = [ground(x + ux * k * SAMPLE, y + uy * k * SAMPLE) for k in range(-n, n + 1)]
-    if max(hs) - min(hs) <= g.edge_jump:
+    if max(hs) - min(hs) <= g.edge_jump:  # flat (an obstacle makes this inf)
         return x, y
     cuts = [k for k in range(2 * n) if abs(hs[k + 1] - hs[k]) > g.edge_jump]
     best, best_d = None, math.inf
@@ -60,7 +65,7 @@ def foothold(
             start += g.edge_margin if hs[lo - 1] > hs[lo] else g.drop_margin
         if hi < 2 * n:
             end -= g.edge_margin if hs[hi + 1] > hs[hi] else g.drop_margin
-        if start <= end:
+        if start <= end and hs[lo] < math.inf:  # no foothold on an obstacle
             short = end - start < g.tread_max - g.edge_margin - g.drop_margin
             at = 0.5 * (start + end) if short else min(max(0.0, start), end)
             if abs(at) < best_d:
@@ -80,9 +85,10 @@ def swing_heights(
     """Foot-centre heights at ``PROFILE + 1`` even swing phases from ``start`` to ``goal``.
 
     The foot lifts ``min_lift`` while it leaves, keeps ``clearance`` above the highest ground
-    within ``edge_margin`` of where it is while it travels (``swing_start`` to ``swing_end``
-    of the swing, see :func:`swing_along`), then comes down on the goal. It climbs or drops
-    no faster than ``swing_rate`` per unit of phase, rising early enough for what lies ahead.
+    (obstacles aside) within ``edge_margin`` of where it is while it travels (``swing_start``
+    to ``swing_end`` of the swing, see :func:`swing_along`), then comes down on the goal. It
+    climbs or drops no faster than ``swing_rate`` per unit of phase, rising early enough for
+    what lies ahead.
     """
     (x0, y0, z0), (gx, gy, gz) = start, goal
     dx, dy = gx - x0, gy - y0
@@ -104,7 +110,8 @@ def swing_heights(
             zs.append(gz + g.min_lift * (1.0 - _smooth((si - m1) / (1.0 - m1))))
         else:
             k = round(length * swing_along(si, g) / step) + a
-            zs.append(max(tops[max(0, k - a) : k + a + 1]) + g.clearance)
+            near = [t for t in tops[max(0, k - a) : k + a + 1] if t < math.inf]
+            zs.append(max(near, default=max(z0, gz)) + g.clearance)
     rate = g.swing_rate / PROFILE
     for i in range(PROFILE - 1, 0, -1):  # rise early enough
         zs[i] = max(zs[i], zs[i + 1] - rate)

@@ -46,6 +46,8 @@ class TerrainGains:
         edge_jump: A height step this big between 2 cm samples is an edge (m).
         foothold_shift: Farthest a foothold moves off its Raibert point (m).
         tread_max: Flat pieces shorter than this are stepped on in their middle (m).
+        obstacle_rise: Ground this far above the line the feet stand on is an obstacle
+            (furniture, a wall), not a step (m).
         terrain_filter: Time constant of the trunk height and pitch references (s).
         ki_height: Integral gain on the trunk height error (1/s).
         ki_pitch: Integral gain on the pitch error (1/s).
@@ -78,6 +80,7 @@ class TerrainGains:
     edge_jump: float = 0.025
     foothold_shift: float = 0.16
     tread_max: float = 0.45
+    obstacle_rise: float = 0.25
     terrain_filter: float = 0.1
     ki_height: float = 2.0
     ki_pitch: float = 2.0

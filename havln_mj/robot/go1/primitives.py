@@ -139,7 +139,7 @@ class Go1Body:
         prefix: str = "go1/",
         estimate: str = "truth",
         gains: Go1Gains | None = None,
-        controller: str = "terrain",
+        controller: str = "trot",
     ) -> None:
         if controller not in CONTROLLERS:
             raise InvalidArgumentError(

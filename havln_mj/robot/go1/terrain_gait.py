@@ -55,10 +55,11 @@ _JOINT_HI = tuple(const.JOINT_RANGES[p][1] for p in const.LEG_PARTS)
 class _Swing:
     """One swing: lift-off point, foothold, height profile."""
 
-    __slots__ = ("goal", "locked", "start", "zs")
+    __slots__ = ("aim", "goal", "locked", "start", "zs")
 
     def __init__(self, start: tuple[float, float, float]) -> None:
         self.start = start
+        self.aim = (math.inf, math.inf)  # the Raibert point the foothold was found for
         self.goal = start
         self.zs: list[float] | None = None
         self.locked = False
@@ -146,9 +147,24 @@ class TerrainGait:
         return (pos[0] + fx, pos[1] + fy, pos[2] + fz)
 
     def ground(self, x: float, y: float, top: float | None = None) -> float:
-        """Terrain height at (x, y) near the trunk (below ``top``, default the trunk's z)."""
-        top = self.est.z if top is None else top
+        """Terrain height at (x, y) near a trunk at height ``top`` (default the trunk's).
+
+        Ground more than ``obstacle_rise`` above the line the feet stand on (where the trunk
+        stands on it, extended along its pitch) is no step but an obstacle (furniture, a
+        wall): ``inf``. Where the scan finds nothing, the floor under the trunk's standing
+        height.
+        """
+        e = self.est
+        if top is None and self._ready:
+            top = e.z
+            ahead = (x - e.x) * math.cos(e.yaw) + (y - e.y) * math.sin(e.yaw)
+            level = self.z_ref - self.g.flat_height - ahead * math.tan(self.pitch_ref)
+        else:
+            top = e.z if top is None else top
+            level = top - self.g.flat_height
         h = self.scan.height(x, y, top)
+        if h > level + self.g.obstacle_rise:
+            return math.inf
         return h if h > -1e3 else top - self.g.flat_height
 
     def reset(self) -> None:
@@ -422,14 +438,18 @@ class TerrainGait:
         g = self.g
         if not sw.locked:
             t_left = max(0.0, 1.0 - s) * (1.0 - self.duty) * self.period
-            gx, gy = self._raibert(leg, t_left, twist)
-            dx, dy = gx - sw.start[0], gy - sw.start[1]
-            d = math.hypot(dx, dy)
-            if d > 0.02:
-                gx, gy = foothold(self.ground, gx, gy, dx / d, dy / d, g)
-            if sw.zs is None or math.hypot(gx - sw.goal[0], gy - sw.goal[1]) > 0.01:
-                sw.goal = (gx, gy, self.ground(gx, gy) + const.FOOT_RADIUS - g.touchdown_depth)
-                sw.zs = swing_heights(self.ground, sw.start, sw.goal, g)
+            ax, ay = self._raibert(leg, t_left, twist)
+            if math.hypot(ax - sw.aim[0], ay - sw.aim[1]) > 0.005:  # moved: look again
+                sw.aim = (ax, ay)
+                gx, gy = ax, ay
+                dx, dy = gx - sw.start[0], gy - sw.start[1]
+                d = math.hypot(dx, dy)
+                if d > 0.02:
+                    gx, gy = foothold(self.ground, gx, gy, dx / d, dy / d, g)
+                if sw.zs is None or math.hypot(gx - sw.goal[0], gy - sw.goal[1]) > 0.01:
+                    gz = self.ground(gx, gy) + const.FOOT_RADIUS - g.touchdown_depth
+                    sw.goal = (gx, gy, gz)
+                    sw.zs = swing_heights(self.ground, sw.start, sw.goal, g)
             sw.locked = s >= g.lock_phase
         if touching and s > g.swing_end:
             foot = self._foot_world(leg, pos, rot)
