@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import mujoco
 
@@ -24,6 +24,7 @@ from havln_mj.robot.go1.estimator import ESTIMATES, OdometryEstimator, TruthEsti
 from havln_mj.robot.go1.gains import Go1Gains, load_gains
 from havln_mj.robot.go1.gait import TrotGait
 from havln_mj.robot.go1.height_scan import HeightScan
+from havln_mj.robot.go1.results import Go1Pose, PrimitiveResult
 from havln_mj.robot.go1.terrain_gait import TerrainGait
 
 OnTick = Callable[[float], None]
@@ -56,60 +57,6 @@ class _Stall:
         return self.stalled
 
 
-@dataclass(frozen=True)
-class Go1Pose:
-    """A trunk pose. ``heading`` follows :mod:`havln_mj.frames` (0 = +y, turning right)."""
-
-    x: float
-    y: float
-    z: float
-    yaw: float
-    heading: float
-
-
-@dataclass(frozen=True)
-class PrimitiveResult:
-    """What a primitive did.
-
-    Attributes:
-        kind: ``"forward"``, ``"turn"`` or ``"stand"``.
-        target: Asked distance (m) or heading change (rad, + right).
-        distance: True displacement along the start heading (m).
-        lateral: True displacement across the start heading (m, + left).
-        heading_change: True heading change (rad, + right).
-        est_distance: ``distance`` according to the controller's estimate.
-        est_lateral: ``lateral`` according to the estimate.
-        est_heading_change: ``heading_change`` according to the estimate.
-        duration: Physics time (s), settling included.
-        steps: Physics steps taken.
-        fell: The robot fell (tipped over or trunk too low); it needs a ``reset``.
-        timed_out: The target was not reached: out of time, or no progress for 1 s (e.g.
-            blocked by a wall).
-    """
-
-    kind: str
-    target: float
-    distance: float
-    lateral: float
-    heading_change: float
-    est_distance: float
-    est_lateral: float
-    est_heading_change: float
-    duration: float
-    steps: int
-    fell: bool
-    timed_out: bool
-
-    @property
-    def error(self) -> float:
-        """Achieved minus target: metres for forward, radians for turn, 0 for stand."""
-        if self.kind == "forward":
-            return self.distance - self.target
-        if self.kind == "turn":
-            return wrap_angle(self.heading_change - self.target)
-        return 0.0
-
-
 def _clip(v: float, lo: float, hi: float) -> float:
     return lo if v < lo else hi if v > hi else v
 
@@ -130,6 +77,10 @@ class Go1Body:
         prefix: The robot's attach prefix.
         estimate: ``"truth"`` (simulator pose) or ``"odometry"`` (gyro + leg kinematics, drifts).
         gains: Controller gains (default: ``robots/go1/gains.json``).
+        controller: ``"trot"`` (the blind trot, :mod:`~havln_mj.robot.go1.gait`) or
+            ``"terrain"`` (the terrain-aware gait, :mod:`~havln_mj.robot.go1.terrain_gait`,
+            which reads the collision geometry through :attr:`scan`). With ``"terrain"``,
+            :meth:`reset` stands the robot on the ground as it is (a stair, a ramp).
     """
 
     def __init__(

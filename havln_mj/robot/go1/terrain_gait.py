@@ -28,6 +28,7 @@ import math
 import mujoco
 
 from havln_mj.robot.go1 import constants as const
+from havln_mj.robot.go1.actuation import Tracker, clip_joints
 from havln_mj.robot.go1.footholds import (
     foothold,
     is_rough,
@@ -38,18 +39,12 @@ from havln_mj.robot.go1.footholds import (
 from havln_mj.robot.go1.frames import roll_pitch, rotation, to_body, to_world
 from havln_mj.robot.go1.gains import TerrainGains
 from havln_mj.robot.go1.height_scan import HeightScan
-from havln_mj.robot.go1.kinematics import leg_fk, leg_ik, leg_jacobian_t
+from havln_mj.robot.go1.kinematics import leg_fk, leg_ik
 
 TROT_OFFSETS = (0.0, 0.5, 0.5, 0.0)  # FR, FL, RR, RL phase offsets
-_KP = 100.0  # actuator position gain of the model
-_DAMPING = (1.0, 2.0, 2.0)  # joint damping of (abduction, thigh, knee)
-_FRICTIONLOSS = 0.2
-_QD_MAX = 8.0  # rad/s: faster target steps are jumps, not motion to feed forward
 _WEIGHT = const.TOTAL_MASS * 9.81
 _NEAR = tuple(-0.3 + 0.04 * k for k in range(24))  # where rough ground changes rhythm (m)
 _FAR = tuple(0.5 + 0.04 * k for k in range(20))  # where it caps the speed (m ahead)
-_JOINT_LO = tuple(const.JOINT_RANGES[p][0] for p in const.LEG_PARTS)
-_JOINT_HI = tuple(const.JOINT_RANGES[p][1] for p in const.LEG_PARTS)
 
 
 class _Swing:
@@ -105,7 +100,7 @@ class TerrainGait:
         self.swings: list[_Swing | None] = [None] * 4
         self._swung = [-1] * 4  # the cycle of each leg's last lift-off
         self._lifted_at = [0.0] * 4  # when each leg last lifted off (s)
-        self._q_prev: list[tuple | None] = [None] * 4
+        self._track = Tracker(data, joint_dadr)
         self.ref = [0.0, 0.0, 0.0]  # trunk reference x, y, yaw
         self.z_ref = self.pitch_ref = 0.0
         self._iz = self._ip = self._ir = 0.0
@@ -176,7 +171,7 @@ class TerrainGait:
         self.walking = self._stopping = self._switching = self._ready = False
         self.ref = [self.est.x, self.est.y, self.est.yaw]
         self._iz = self._ip = self._ir = 0.0
-        self._q_prev = [None] * 4
+        self._track.forget()
         self._next_scan = -math.inf
         self._look()
         self._rough_mode = self.rough
@@ -251,7 +246,9 @@ class TerrainGait:
             hx, hy = const.HIP_OFFSETS[leg]
             ry = hy + const.LEG_SIDE[leg] * const.ABDUCTION
             fx, fy = foothold(ground, x + c * hx - s * ry, y + s * hx + c * ry, c, s, self.g)
-            feet.append((fx, fy, ground(fx, fy) + const.FOOT_RADIUS - self.g.touchdown_depth))
+            fz = ground(fx, fy)
+            fz = fz if math.isfinite(fz) else top - self.g.flat_height
+            feet.append((fx, fy, fz + const.FOOT_RADIUS - self.g.touchdown_depth))
         front = 0.5 * (feet[0][2] + feet[1][2])
         rear = 0.5 * (feet[2][2] + feet[3][2])
         pitch = -math.atan2(front - rear, 2.0 * const.HIP_X)
@@ -263,7 +260,7 @@ class TerrainGait:
         for leg, f in enumerate(feet):
             hx, hy = const.HIP_OFFSETS[leg]
             b = to_body(rot, (f[0] - x, f[1] - y, f[2] - z))
-            q.extend(_clip_joints(leg_ik(leg, b[0] - hx, b[1] - hy, b[2])))
+            q.extend(clip_joints(leg_ik(leg, b[0] - hx, b[1] - hy, b[2])))
         return z, pitch, q
 
     # --------------------------------------------------------------- step
@@ -398,17 +395,17 @@ class TerrainGait:
         f = self.feet[leg]
         b = to_body(ref_rot, (f[0] - ref_pos[0], f[1] - ref_pos[1], f[2] - ref_pos[2]))
         hx, hy = const.HIP_OFFSETS[leg]
-        return self._feedforward(leg, leg_ik(leg, b[0] - hx, b[1] - hy, b[2]), dt, grf)
+        return self._track(leg, leg_ik(leg, b[0] - hx, b[1] - hy, b[2]), dt, grf)
 
     def _lift_off(self, leg: int, pos, rot) -> None:
         self._lifted_at[leg] = self.data.time
         self.stance[leg] = False
         self.swings[leg] = _Swing(self._foot_world(leg, pos, rot))
-        self._q_prev[leg] = None
+        self._track.forget(leg)
 
     def _land(self, leg: int, pos, rot) -> None:
         self.feet[leg] = self._foot_world(leg, pos, rot)
-        self._q_prev[leg] = None
+        self._track.forget(leg)
         self.stance[leg] = True
         self.swings[leg] = None
 
@@ -448,6 +445,8 @@ class TerrainGait:
                     gx, gy = foothold(self.ground, gx, gy, dx / d, dy / d, g)
                 if sw.zs is None or math.hypot(gx - sw.goal[0], gy - sw.goal[1]) > 0.01:
                     gz = self.ground(gx, gy) + const.FOOT_RADIUS - g.touchdown_depth
+                    if not math.isfinite(gz):  # under an obstacle: aim where the foot left
+                        gz = sw.start[2]
                     sw.goal = (gx, gy, gz)
                     sw.zs = swing_heights(self.ground, sw.start, sw.goal, g)
             sw.locked = s >= g.lock_phase
@@ -467,34 +466,8 @@ class TerrainGait:
         target = (x0 + (gx - x0) * h - pos[0], y0 + (gy - y0) * h - pos[1], z - pos[2])
         b = to_body(rot, target)
         hx, hy = const.HIP_OFFSETS[leg]
-        return self._feedforward(leg, leg_ik(leg, b[0] - hx, b[1] - hy, b[2]), dt, None)
-
-    def _feedforward(self, leg: int, q, dt: float, grf) -> tuple[float, float, float]:
-        """Joint targets that make the actuators reach ``q`` despite damping and gravity.
-
-        A position actuator's torque is ``kp (target − q)``; the target is moved by the
-        torque the joint needs (damping and friction at the target's velocity, gravity and
-        bias forces, and for a stance leg ``−Jᵀ grf`` to bear ``grf``, the ground's force on
-        the foot in the trunk frame) over ``kp``.
-        """
-        prev = self._q_prev[leg]
-        self._q_prev[leg] = q
-        bias = self.data.qfrc_bias
-        load = leg_jacobian_t(leg, q[0], q[1], q[2], grf) if grf is not None else (0.0,) * 3
-        out = []
-        for j in range(3):
-            qd = _clip((q[j] - prev[j]) / dt, _QD_MAX) if prev is not None else 0.0
-            tau = _DAMPING[j] * qd + _FRICTIONLOSS * math.tanh(qd / 0.2) - load[j]
-            out.append(q[j] + (tau + bias[self.joint_dadr[3 * leg + j]]) / _KP)
-        return _clip_joints(out)
+        return self._track(leg, leg_ik(leg, b[0] - hx, b[1] - hy, b[2]), dt, None)
 
 
 def _clip(v: float, limit: float) -> float:
     return -limit if v < -limit else limit if v > limit else v
-
-
-def _clip_joints(q) -> tuple[float, float, float]:
-    return tuple(
-        lo if v < lo else hi if v > hi else v
-        for v, lo, hi in zip(q, _JOINT_LO, _JOINT_HI, strict=True)
-    )
