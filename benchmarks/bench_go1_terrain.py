@@ -93,11 +93,11 @@ def const_stand(floor: float) -> float:
     return floor + 0.27
 
 
-def _proxy_stairs(data: Path, edges: int, seed: int) -> dict:
+def _proxy_stairs(data: Path, edges: int, seed: int, controller: str) -> dict:
     """Stair edges on HA-R2R val_seen paths, walked both ways in the graph proxies."""
     from havln_mj.scene.scan import load_scan
     from havln_mj.sim.crowd import NO_CROWD
-    from havln_mj.sim.legged import LeggedAgent, LeggedOptions, LeggedWorld
+    from havln_mj.sim.legged import PREFIX, LeggedAgent, LeggedOptions, LeggedWorld
     from havln_mj.sim.world import WorldOptions
 
     episodes = data / "ha_r2r" / "HA_val_seen.json"
@@ -116,6 +116,7 @@ def _proxy_stairs(data: Path, edges: int, seed: int) -> dict:
         for e in sorted(by_scan[sid])
         if abs(scan.graph.floor_z(e[0]) - scan.graph.floor_z(e[1])) > 0.3
     ]
+    n_edges = len(todo)
     if edges and len(todo) > edges:
         todo = [todo[k] for k in sorted(rng.permutation(len(todo))[:edges])]
     rows = []
@@ -124,6 +125,7 @@ def _proxy_stairs(data: Path, edges: int, seed: int) -> dict:
         g = scan.graph
         world = LeggedWorld(scan, WorldOptions(collision="boxes"), NO_CROWD, LeggedOptions())
         agent = LeggedAgent(world)
+        agent.body = Go1Body(world.model, agent.data, PREFIX, controller=controller)
         for a, b in (e for s, e in todo if s == sid):
             for src, dst in ((a, b), (b, a)):
                 heading = float(rng.uniform(0, 2 * math.pi))
@@ -146,6 +148,7 @@ def _proxy_stairs(data: Path, edges: int, seed: int) -> dict:
                 )
     n = max(len(rows), 1)
     return {
+        "stair_edges_on_paths": n_edges,
         "stair_edge_walks": len(rows),
         "walked": round(sum(r["walked"] for r in rows) / n, 3),
         "falls": round(sum(r["fell"] for r in rows) / n, 3),
@@ -188,7 +191,9 @@ def main() -> None:
             for down in (False, True)
         ]
     if "proxy" in parts:
-        out["proxy_stairs_val_seen"] = _proxy_stairs(args.data, args.proxy_edges, args.seed)
+        out["proxy_stairs_val_seen"] = _proxy_stairs(
+            args.data, args.proxy_edges, args.seed, args.controller
+        )
     out["wall_seconds"] = round(time.perf_counter() - t, 1)
     print(json.dumps(out, indent=1))
 

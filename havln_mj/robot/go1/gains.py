@@ -127,13 +127,15 @@ class Go1Gains:
         foot_x_offset: Nominal feet shift forward of the hips (m); trims the trot's drift.
         raibert_gain: Foot placement gain on velocity error (s), for balance.
         ki_velocity: Integral gain of the linear velocity loop (1/s).
-        ki_yaw_rate: Integral gain of the yaw-rate loop (1/s); 0 by default, as its wind-up
+        ki_yaw_rate: Integral gain of the yaw-rate loop (1/s); above about 1 its wind-up
             made turns overshoot and spring back by up to 5°.
         integral_limit_velocity: Clip of the velocity integral (m/s).
         integral_limit_yaw_rate: Clip of the yaw-rate integral (rad/s).
         velocity_filter: Time constant of the measured-velocity low-pass (s).
         forward_kp: P gain on remaining distance (1/s).
         forward_v_max: Cruise speed cap (m/s).
+        odometry_v_max: Cruise speed cap closed on odometry (m/s): the feet slip more at
+            speed, and dead reckoning drifts with them.
         forward_v_min: Speed floor while the target is not reached (m/s).
         forward_k_lateral: Lateral offset hold gain (1/s).
         forward_k_yaw: Heading hold gain while walking (1/s).
@@ -164,7 +166,8 @@ class Go1Gains:
     integral_limit_yaw_rate: float = 0.6
     velocity_filter: float = 0.05
     forward_kp: float = 2.5
-    forward_v_max: float = 0.5
+    forward_v_max: float = 0.7
+    odometry_v_max: float = 0.5
     forward_v_min: float = 0.1
     forward_k_lateral: float = 1.0
     forward_k_yaw: float = 2.0

@@ -265,6 +265,7 @@ class Go1Body:
         x0, y0, yaw0 = e.x, e.y, e.yaw
         c0, s0 = math.cos(yaw0), math.sin(yaw0)
         sign = 1.0 if distance >= 0 else -1.0
+        v_max = g.odometry_v_max if self.estimate == "odometry" else g.forward_v_max
         stall = _Stall(self.data, STALL_SECONDS, STALL_DISTANCE)
 
         def command(hold: bool) -> tuple[float, float, float, bool]:
@@ -279,7 +280,7 @@ class Go1Body:
             if hold or done:  # no speed floor: creep back or forward onto the target
                 v = _clip(g.forward_kp * rem, -g.forward_v_min, g.forward_v_min)
             else:
-                v = sign * _clip(g.forward_kp * abs(rem), g.forward_v_min, g.forward_v_max)
+                v = sign * _clip(g.forward_kp * abs(rem), g.forward_v_min, v_max)
             vl = _clip(-g.forward_k_lateral * lat, -0.15, 0.15)
             w = _clip(-g.forward_k_yaw * dyaw, -0.5, 0.5)
             cd, sd = math.cos(dyaw), math.sin(dyaw)
