@@ -38,7 +38,8 @@ class ProxyParams:
         route_ratio: A route through other viewpoints may be at most this many times as
             long as its edge.
         stair_grade: Steepest climb of a flight drawn for an edge the graph cannot route
-            (rise over run; 0.7 is 35°: risers of ``riser`` on treads of 0.26 m).
+            (rise over run; 0.75 is 37°, a common stair: risers of ``riser`` on treads of
+            0.24 m).
     """
 
     cell: float = 0.1
@@ -57,7 +58,7 @@ class ProxyParams:
     max_grade: float = 1.0
     grade_window: float = 1.0
     route_ratio: float = 1.5
-    stair_grade: float = 0.7
+    stair_grade: float = 0.75
 
     @property
     def reach_cells(self) -> int:
