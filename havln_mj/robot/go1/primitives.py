@@ -28,7 +28,7 @@ from havln_mj.robot.go1.results import Go1Pose, PrimitiveResult
 from havln_mj.robot.go1.terrain_gait import TerrainGait
 
 OnTick = Callable[[float], None]
-CONTROLLERS = ("terrain", "trot")
+CONTROLLERS = ("trot", "terrain")
 MAX_DISTANCE = 10.0  # metres, per forward primitive
 MAX_TURN = 2.0 * math.pi  # radians, per turn primitive
 MAX_STAND = 600.0  # seconds
