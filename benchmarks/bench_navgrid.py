@@ -55,7 +55,7 @@ def synthetic_world(n_boxes: int, seed: int = 0, size: float = 30.0) -> mujoco.M
 
 def bench_grid(model: mujoco.MjModel, floor: float, queries: int, seed: int) -> dict:
     from havln_mj import groups
-    from havln_mj.scene.navgrid import GridSpec, NavGrid
+    from havln_mj.nav import GridSpec, NavGrid
 
     spec = GridSpec()
     build_s = median_seconds(lambda: NavGrid.from_model(model, floor, spec), 3)

@@ -1,60 +1,42 @@
 """``havln_mj`` command line: ``havln_mj scenes build <ids...>`` pre-builds scans.
 
+``havln_mj view --scene <id>`` opens the live viewer (:mod:`havln_mj.viewer`).
+
 Each scene is built in its own process (scan folder, collision geometry, compiled world), so
 later runs load from the cache at once. Run ``havln_mj scenes build --help`` for options.
 ``havln_mj dataset build --scenes <ids...> --split <name>`` writes an HA-R2R style split of
-generated episodes (see :mod:`havln_mj.tasks.procedural`).
+generated episodes (see :mod:`havln_mj.tasks.procedural`). ``havln_mj annotate --scene <id>``
+serves a local page to place people and save them as HA3D placements
+(see :mod:`havln_mj.annotator`).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-import time
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
 from tqdm import tqdm
 
-from havln_mj.errors import HavlnError
+from havln_mj.annotator import command as annotate_command
+from havln_mj.errors import HavlnError, InvalidArgumentError
+from havln_mj.sim.prebuild import build_scene
 from havln_mj.sim.world import COLLISION_MODES
-
-
-def build_one(
-    scene: str, mp3d_dir: Path | None, connectivity_dir: Path | None, collision: str
-) -> dict:
-    """Builds one scene and its world; returns a summary row."""
-    from havln_mj.scene.scan import load_scan
-    from havln_mj.sim.world import WorldOptions, build_world
-
-    t0 = time.perf_counter()
-    scan = load_scan(scene, mp3d_dir=mp3d_dir, connectivity_dir=connectivity_dir)
-    world = build_world(scan, WorldOptions(collision=collision))
-    return {
-        "scene": scan.scene_id,
-        "kind": scan.kind,
-        "viewpoints": scan.graph.num_nodes,
-        "collision": world.collision,
-        "collision_geoms": world.n_collision_geoms,
-        "edges_by_route": len(scan.routes),
-        "edges_by_flight": scan.meta.get("edges_by_flight"),
-        "unwalkable_edges": scan.meta.get("unwalkable_edges"),
-        "seconds": round(time.perf_counter() - t0, 2),
-    }
 
 
 def _scene_ids(args: argparse.Namespace) -> list[str]:
     ids = list(args.ids)
     if args.all_connectivity:
         if args.connectivity_dir is None:
-            raise HavlnError("--all-connectivity needs --connectivity-dir")
+            raise InvalidArgumentError("--all-connectivity needs --connectivity-dir")
         ids += sorted(
             p.name[: -len("_connectivity.json")]
             for p in args.connectivity_dir.glob("*_connectivity.json")
         )
     if not ids:
-        raise HavlnError("no scene ids given (e.g. proc-0 proc-1, or --all-connectivity)")
+        raise InvalidArgumentError("no scene ids given (e.g. proc-0 proc-1, or --all-connectivity)")
     return ids
 
 
@@ -79,7 +61,7 @@ def scenes_build(args: argparse.Namespace) -> int:
     failures = 0
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
         futures = {
-            pool.submit(build_one, s, args.mp3d_dir, args.connectivity_dir, args.collision): s
+            pool.submit(build_scene, s, args.mp3d_dir, args.connectivity_dir, args.collision): s
             for s in ids
         }
         with tqdm(total=len(ids), desc="scenes", unit="scene") as bar:
@@ -145,7 +127,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     gen.add_argument("--seed", type=int, default=0, help="seed; the simulator's people match it")
     gen.add_argument("--out", type=Path, default=Path("."), help="output folder (default .)")
+    from havln_mj import viewer
+
+    viewer.add_arguments(
+        sub.add_parser("view", help="the live MuJoCo viewer with keyboard control of the agent")
+    )
+    annotate_command.add_parser(sub)
     args = parser.parse_args(argv)
+    if args.group == "view":
+        return viewer.main(args)
+    if args.group == "annotate":
+        try:
+            return annotate_command.annotate(args)
+        except HavlnError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
     if args.group == "dataset":
         if args.episodes_per_scene < 1:
             parser.error(f"--episodes-per-scene must be at least 1, got {args.episodes_per_scene}")

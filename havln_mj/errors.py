@@ -63,6 +63,14 @@ class RenderingUnavailableError(HavlnError, RuntimeError):
     """No OpenGL backend (EGL or OSMesa) could be started."""
 
 
+class OutputError(HavlnError, OSError):
+    """An output (a run folder, a video, a result file) cannot be written or finished."""
+
+
+class ClosedError(HavlnError, RuntimeError):
+    """A resource (a camera, a video writer) used after it was closed."""
+
+
 class DependencyNotInstalledError(HavlnError, ImportError):
     """An optional extra (torch, ray, gymnasium, ...) is needed but not installed."""
 

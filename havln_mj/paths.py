@@ -1,17 +1,20 @@
 """The one place that resolves where assets and caches live.
 
-Assets (materials, scene recipes, activity catalogs, robot models) are found under the
-project home: ``$HAVLN_HOME`` if set, else the repository root that holds this package.
-Caches (built scans, collision hulls, features) go to ``$HAVLN_CACHE``, default
-``~/.cache/havln_mj``. Nothing here depends on the working directory.
+Assets (materials, scene recipes, activity catalogs, robot models, agent configs) are found
+under the project home: ``$HAVLN_HOME`` if set; else the package's own copy
+(``havln_mj/_data``, which a built wheel carries, found through ``importlib.resources``);
+else the source checkout that holds this package (an editable install). Caches (built scans,
+collision hulls, features) go to ``$HAVLN_CACHE``, default ``~/.cache/havln_mj``. Nothing
+here depends on the working directory.
 """
 
 from __future__ import annotations
 
 import os
+from importlib import resources
 from pathlib import Path
 
-from havln_mj.errors import MissingDataError
+from havln_mj.errors import InvalidArgumentError, MissingDataError
 
 _ASSET_DIRS = ("assets", "scenes", "humans", "robots", "agents", "eval")
 
@@ -24,12 +27,18 @@ def project_home() -> Path:
             package was installed without its repository and ``$HAVLN_HOME`` is unset.
     """
     env = os.environ.get("HAVLN_HOME")
-    home = Path(env).expanduser().resolve() if env else Path(__file__).resolve().parents[1]
+    if env:
+        home, source = Path(env).expanduser().resolve(), "$HAVLN_HOME"
+    else:
+        packaged = Path(str(resources.files("havln_mj") / "_data"))
+        checkout = Path(__file__).resolve().parents[1]
+        home = packaged if packaged.is_dir() else checkout
+        source = "the installed package" if packaged.is_dir() else "the source checkout"
     if not (home / "scenes").is_dir():
-        source = "$HAVLN_HOME" if env else "the repository root"
         raise MissingDataError(
-            f"asset folder not found: {home / 'scenes'} ({source}). Install havln_mj from its "
-            "repository with 'pip install -e .', or set HAVLN_HOME to a checkout."
+            f"asset folder not found: {home / 'scenes'} ({source}). Reinstall havln_mj "
+            "('pip install havln_mj' or 'pip install -e .' in a checkout), or set HAVLN_HOME "
+            "to a checkout."
         )
     return home
 
@@ -45,7 +54,7 @@ def asset_path(kind: str, *parts: str) -> Path:
         MissingDataError: The file does not exist.
     """
     if kind not in _ASSET_DIRS:
-        raise ValueError(f"unknown asset kind {kind!r}; valid: {', '.join(_ASSET_DIRS)}")
+        raise InvalidArgumentError(f"unknown asset kind {kind!r}; valid: {', '.join(_ASSET_DIRS)}")
     path = project_home().joinpath(kind, *parts)
     if not path.exists():
         raise MissingDataError(f"asset not found: {path}")

@@ -2,15 +2,23 @@
 
 People are placed by HA3D's rule and go about their activities while the agent walks; the
 agent's collisions with them (within 1 m, checked at 16 Hz along the way) are counted per
-episode. Writes to ``--out``: ``egocentric.mp4`` (the agent's view), ``frame.png`` (the view
-showing people best, else the most detailed view of the first episode), ``topdown.png``
-(floor plan, rooms, graph, the walked paths, people) and ``summary.json``.
+episode. Everything goes through the :class:`~havln_mj.sim.simulator.Simulator`: each path
+is walked as graph actions (turn toward the next viewpoint, then move to it) and filmed
+during the actions. With ``--robot go1`` the same episodes are walked again by the simulated
+GO1 and compared with the point body.
+
+Writes to ``--out``: ``egocentric.mp4`` (the agent's view), ``frame.png`` (the view showing
+people best, else the most detailed view of the first episode), ``topdown.png`` (floor plan,
+rooms, graph, the walked paths, people), ``go1.mp4`` (with ``--robot go1``: the GO1's head
+camera beside a chase view) and, last, ``summary.json``, which lists the files of the run.
+Outputs are written to a staging folder and moved into place only when the run completes;
+files an earlier run left in the folder that this run did not write are removed, so a folder
+never mixes two runs. An interrupted run leaves the folder as it was and exits 130.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 import time
@@ -18,30 +26,17 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-import cv2
-import mujoco
 import numpy as np
-from tqdm import tqdm
 
-from havln_mj import __version__, groups
+from havln_mj import __version__
 from havln_mj.errors import HavlnError, InvalidArgumentError
-from havln_mj.frames import heading_to, wrap_angle
-from havln_mj.humans.crowd import Crowd
-from havln_mj.humans.mujoco_people import PeopleWriter
-from havln_mj.humans.skinned import SkinWriter
-from havln_mj.render.camera import Camera
-from havln_mj.render.topdown import draw_topdown
-from havln_mj.robot.point_body import CAMERA, PointBody
-from havln_mj.run_go1 import run_go1
+from havln_mj.frames import heading_to
+from havln_mj.recording import OUTPUTS, Recording, staged_outputs
 from havln_mj.scene.ids import parse_scene_id
 from havln_mj.scene.navgraph import NavGraph
-from havln_mj.scene.navgrid import NavGrid
 from havln_mj.scene.procedural.recipe import load_recipe
-from havln_mj.scene.scan import known_scene_ids, load_scan
-from havln_mj.sim.crowd import COLLISION_DISTANCE, SAMPLE_HZ, Proximity, track_proximity
-from havln_mj.sim.legged import LeggedOptions
-from havln_mj.sim.people import HumanCrowds
-from havln_mj.sim.world import COLLISION_MODES, WorldOptions, build_world
+from havln_mj.scene.scan import known_scene_ids
+from havln_mj.sim.world import COLLISION_MODES, WorldOptions
 
 
 def default_scene() -> str:
@@ -78,54 +73,76 @@ def sample_episodes(
     return episodes
 
 
-def walk(body: PointBody, graph: NavGraph, path: Sequence[str], fps: float):
-    """Moves the body along a path, turning toward each next viewpoint and then walking to it.
+def make_simulator(args: argparse.Namespace, body: str):
+    """The simulator a run walks with: rendering on, RGB, the run's camera and people."""
+    from havln_mj.sim.legged import LeggedOptions
+    from havln_mj.sim.simulator import Simulator
 
-    Yields:
-        The simulated time (s) after each sample, at ``fps`` samples per simulated second; the
-        body holds the pose of that moment.
+    sim = Simulator(
+        humans=not args.no_people,
+        human_placements=args.human_placements,
+        human_motions=args.haps_dir,
+        smpl_model=args.smpl_model,
+        body=body,
+        legged=LeggedOptions(estimate=args.go1_estimate, camera_height=args.go1_camera_height),
+        together=args.together,
+        reactions=not args.no_reactions,
+    )
+    if args.connectivity_dir is not None:
+        sim.setNavGraphPath(args.connectivity_dir)
+    if args.mp3d_dir is not None:
+        sim.setDatasetPath(args.mp3d_dir)
+    sim.setCameraResolution(args.width, args.height)
+    sim.setCameraVFOV(math.radians(args.vfov))
+    sim.setRestrictedNavigation(False)
+    sim.set_color_order("RGB")
+    sim.set_human_mask_enabled(True)
+    sim.setSeed(args.seed)
+    collision = args.collision if body == "point" else "auto"
+    sim.set_world_options(
+        WorldOptions(
+            collision=collision,
+            offscreen=(args.width, args.height),
+            vfov_deg=args.vfov,
+            people_style=args.people_style,
+        )
+    )
+    sim.initialize()
+    return sim
+
+
+def walk(sim, scene: str, path: Sequence[str]) -> list:
+    """Walks ``path`` with graph actions; returns the state after the start and each step.
+
+    Each hop is two actions: turn to face the next viewpoint, then move to it. The walk
+    stops early when the body falls, its physics diverges, or a move does not arrive.
     """
-    t = 0.0
-    yield t
-    for nxt in path[1:]:
-        start, target = body.position.copy(), graph.position(nxt)
-        turn = wrap_angle(heading_to(start, target) - body.heading)
-        h0 = body.heading
-        duration = body.turn_duration(turn)
-        steps = max(1, math.ceil(duration * fps))
-        for k in range(1, steps + 1):
-            body.set_pose(start, h0 + turn * k / steps)
-            yield t + duration * k / steps
-        t += duration
-        duration = body.move_duration(target)
-        steps = max(1, math.ceil(duration * fps))
-        for k in range(1, steps + 1):
-            body.set_pose(start + (target - start) * k / steps, body.heading)
-            yield t + duration * k / steps
-        t += duration
-
-
-def _nearest_person(crowd: Crowd, t: float, position: np.ndarray) -> float:
-    """Horizontal distance from ``position`` to the nearest pelvis at time ``t`` (inf if none)."""
-    if not len(crowd):
-        return math.inf
-    pelvis = crowd.positions(np.array([t]))[0]
-    return float(np.min(np.hypot(*(pelvis[:, :2] - position[:2]).T)))
-
-
-def _collisions(crowd: Crowd, track: np.ndarray) -> Proximity:
-    """The people an episode's track ``(n, 4)`` of ``(t, x, y, z)`` came within 1 m of.
-
-    The track is piecewise linear between samples, so resampling it at 16 Hz is exact.
-    """
-    t = track[:, 0]
-    dense = np.union1d(t, np.arange(t[0], t[-1], 1.0 / SAMPLE_HZ))
-    xyz = np.column_stack([np.interp(dense, t, track[:, i]) for i in (1, 2, 3)])
-    return track_proximity(crowd, dense, xyz)
+    graph = sim.graph(scene)
+    start, nxt = graph.position(path[0]), graph.position(path[1])
+    sim.newEpisode([scene], [path[0]], [heading_to(start, nxt)], [0.0])
+    states = [sim.getState()[0]]
+    for target in path[1:]:
+        state = states[-1]
+        ids = [v.viewpointId for v in state.navigableLocations]
+        if target not in ids:
+            raise InvalidArgumentError(
+                f"viewpoint {target} is not navigable from {state.location.viewpointId}"
+            )
+        turn = state.navigableLocations[ids.index(target)].rel_heading
+        if abs(turn) > 1e-6:
+            sim.makeAction([0], [turn], [0.0])
+            state = sim.getState()[0]
+            ids = [v.viewpointId for v in state.navigableLocations]
+        sim.makeAction([ids.index(target)], [0.0], [0.0])
+        states.append(sim.getState()[0])
+        last = states[-1]
+        if last.fell or last.diverged or not last.arrived:
+            break
+    return states
 
 
 def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
-    """Parses command-line arguments."""
+    """Parses and checks the command-line arguments (before any work is done)."""
     p = argparse.ArgumentParser(prog="python -m havln_mj.run", description=__doc__.splitlines()[0])
     p.add_argument(
         "--scene",
@@ -133,16 +150,38 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         help="proc-<seed>, a Matterport scan id, or a scan folder (default: built-in house)",
     )
     p.add_argument("--episodes", type=int, default=3, help="episodes to walk (default 3)")
-    p.add_argument("--seed", type=int, default=0, help="seed for start/goal sampling (default 0)")
+    p.add_argument("--seed", type=int, default=0, help="seed of episodes and people (default 0)")
     p.add_argument(
         "--out", type=Path, default=None, help="output folder (default ./havln_runs/<scene>)"
     )
-    p.add_argument("--width", type=int, default=640)
-    p.add_argument("--height", type=int, default=480)
+    p.add_argument("--width", type=int, default=640, help="image width, pixels (default 640)")
+    p.add_argument("--height", type=int, default=480, help="image height, pixels (default 480)")
     p.add_argument("--vfov", type=float, default=60.0, help="vertical field of view, degrees")
     p.add_argument("--fps", type=float, default=10.0, help="video frames per simulated second")
-    p.add_argument("--collision", choices=COLLISION_MODES, default="auto")
+    p.add_argument(
+        "--collision",
+        choices=COLLISION_MODES,
+        default="auto",
+        help="collision geometry for the map's walkable area (default auto)",
+    )
     p.add_argument("--no-people", action="store_true", help="leave the scene empty")
+    p.add_argument(
+        "--together",
+        type=float,
+        default=0.3,
+        help="chance a person placed is joined by others (talking, walking along; default 0.3)",
+    )
+    p.add_argument(
+        "--no-reactions",
+        action="store_true",
+        help="people ignore the agent (by default walkers yield and others glance at it)",
+    )
+    p.add_argument(
+        "--people-style",
+        choices=("pieces", "skinned", "capsules"),
+        default="pieces",
+        help="how people are drawn (default pieces: dressed bodies, fastest)",
+    )
     p.add_argument(
         "--robot",
         choices=("point", "go1"),
@@ -192,10 +231,26 @@ def parse_args(argv: Sequence[str] | None) -> argparse.Namespace:
         help="folder of <scan>_connectivity.json graphs (default $HAVLN_CONNECTIVITY_DIR)",
     )
     args = p.parse_args(argv)
-    if args.episodes < 1:
-        p.error(f"--episodes must be at least 1, got {args.episodes}")
-    if not (0 < args.fps <= 120):
-        p.error(f"--fps must be in (0, 120], got {args.fps}")
+    checks = [
+        (
+            args.scene is None or args.scene.strip(),
+            f"--scene must name a scene, got {args.scene!r}",
+        ),
+        (args.episodes >= 1, f"--episodes must be at least 1, got {args.episodes}"),
+        (args.seed >= 0, f"--seed must be ≥ 0, got {args.seed}"),
+        (1 <= args.width <= 8192, f"--width must be in [1, 8192] pixels, got {args.width}"),
+        (1 <= args.height <= 8192, f"--height must be in [1, 8192] pixels, got {args.height}"),
+        (0 < args.vfov < 180, f"--vfov must be in (0, 180) degrees, got {args.vfov}"),
+        (0 < args.fps <= 120, f"--fps must be in (0, 120], got {args.fps}"),
+        (0 <= args.together <= 1, f"--together must be a chance in [0, 1], got {args.together}"),
+        (
+            args.go1_camera_height is None or 0.1 <= args.go1_camera_height <= 3.0,
+            f"--go1-camera-height must be in [0.1, 3] m, got {args.go1_camera_height}",
+        ),
+    ]
+    for ok, message in checks:
+        if not ok:
+            p.error(message)
     return args
 
 
@@ -205,180 +260,59 @@ def run(args: argparse.Namespace) -> dict:
     scene = args.scene or default_scene()
     parse_scene_id(scene, known_scene_ids())  # fail at once on a bad id
     out = (args.out or Path.cwd() / "havln_runs" / scene.replace("/", "_")).expanduser().resolve()
-    out.mkdir(parents=True, exist_ok=True)
-
-    t0 = time.perf_counter()
-    scan = load_scan(scene, mp3d_dir=args.mp3d_dir, connectivity_dir=args.connectivity_dir)
-    t_scan = time.perf_counter() - t0
-    print(f"havln_mj {__version__}: {scan.description}", flush=True)
-    crowd = Crowd([])
-    if not args.no_people:
-        make = HumanCrowds(lambda _: scan, args.human_placements, args.haps_dir, args.smpl_model)
-        crowd = make(scan.scene_id, scan.graph, np.random.default_rng([args.seed, 1]))
-    print(f"people: {len(crowd)}", *(f"{p.text} ({p.region})" for p in crowd.people), sep="\n  ")
-    world = build_world(
-        scan,
-        WorldOptions(
-            collision=args.collision, offscreen=(args.width, args.height), vfov_deg=args.vfov
-        ),
-        crowd.shapes,
-        crowd.skins,
-    )
-    print(
-        f"world: {world.model.ngeom} geoms, collision {world.collision} "
-        f"({world.n_collision_geoms} geoms), built in {world.build_seconds:.2f} s",
-        flush=True,
-    )
-
-    graph = scan.graph
-    rng = np.random.default_rng(args.seed)
-    episodes = sample_episodes(graph, args.episodes, rng)
-    model, data = world.model, mujoco.MjData(world.model)
-    video_path, frame_path = out / "egocentric.mp4", out / "frame.png"
-    writer = cv2.VideoWriter(
-        str(video_path), cv2.VideoWriter_fourcc(*"mp4v"), args.fps, (args.width, args.height)
-    )
-    if not writer.isOpened():
-        raise HavlnError(f"cannot open an MP4 writer for {video_path}")
-    people = PeopleWriter(model, len(crowd))
-    skinned = [k for k, skin in enumerate(crowd.skins) if skin is not None]
-    skins = SkinWriter(model, skinned) if skinned else None
-    human_geom = model.geom_group == groups.HUMANS
-    records, render_s, frames, clock = [], 0.0, 0, 0.0
-    best_detail, best_frame = -1.0, None
-    with Camera(
-        model, CAMERA, args.width, args.height, args.vfov, geom_groups=groups.CAMERA_GROUPS
-    ) as cam:
-        for k, ep in enumerate(tqdm(episodes, desc="episodes", unit="ep")):
-            start = graph.position(ep.start)
-            body = PointBody(start, heading=heading_to(start, graph.position(ep.path[1])))
-            sim_t, ep_frames, track = 0.0, 0, []
-            for sim_t in walk(body, graph, ep.path, args.fps):
-                track.append((clock + sim_t, *body.position))
-                people.write(data, *crowd.pose(clock + sim_t))
-                if skins is not None:
-                    verts = crowd.skin_vertices(clock + sim_t)
-                    for mesh in skins.write(model, data, verts):
-                        cam.upload_mesh(mesh)
-                body.write(model, data)
-                t0 = time.perf_counter()
-                rgb = cam.render(data, depth=False).rgb
-                render_s += time.perf_counter() - t0
-                bgr = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
-                near = _nearest_person(crowd, clock + sim_t, body.position)
-                cv2.putText(
-                    bgr,
-                    f"episode {k + 1}/{len(episodes)}  t={sim_t:5.1f}s"
-                    + ("  COLLISION" if near <= COLLISION_DISTANCE else ""),
-                    (8, 20),
-                    cv2.FONT_HERSHEY_SIMPLEX,
-                    0.5,
-                    (255, 255, 255),
-                    1,
-                    cv2.LINE_AA,
-                )
-                writer.write(bgr)
-                # Keep the view showing people best (checked a few times a second), else
-                # the most detailed first-episode view.
-                score = float(rgb.std()) / 1e3 if k == 0 else -1.0
-                if len(crowd) and ep_frames % max(1, round(args.fps / 3)) == 0:
-                    ids = cam.render_geom_ids(data)
-                    seen = float((human_geom[np.maximum(ids, 0)] & (ids >= 0)).mean())
-                    score += seen if seen < 0.1 else 0.0  # whole people, not one up close
-                if score > best_detail:
-                    best_detail, best_frame = score, rgb
-
-                ep_frames += 1
-            frames += ep_frames
-            contact = _collisions(crowd, np.array(track))
-            clock += sim_t
-            records.append(
-                {
-                    "start": ep.start,
-                    "goal": ep.goal,
-                    "path": ep.path,
-                    "steps": len(ep.path) - 1,
-                    "geodesic_m": round(ep.distance, 3),
-                    "path_length_m": round(graph.path_length(ep.path), 3),
-                    "sim_seconds": round(sim_t, 3),
-                    "frames": ep_frames,
-                    "human_collisions": len(contact.people),
-                    "people_hit": [crowd.people[i].text for i in contact.people],
-                    "min_human_distance_m": (
-                        round(contact.min_distance, 3) if len(crowd) else None
-                    ),
-                }
-            )
-    writer.release()
-    cv2.imwrite(str(frame_path), cv2.cvtColor(best_frame, cv2.COLOR_RGB2BGR))
-    map_path = out / "topdown.png"
-    level = graph.floor_z(episodes[0].start)
-    navgrid = None
-    if world.collision != "none":
-        navgrid = NavGrid.from_model(model, level)
-        for ep, rec in zip(episodes, records, strict=True):
-            if abs(graph.floor_z(ep.goal) - level) < 0.5:
-                d = navgrid.distance(graph.position(ep.start), graph.position(ep.goal))
-                rec["grid_geodesic_m"] = round(d, 3) if math.isfinite(d) else None
-    draw_topdown(
-        map_path,
-        graph,
-        scan.regions,
-        scan.mesh,
-        [e.path for e in episodes],
-        level_floor=level,
-        title=scan.description,
-        navgrid=navgrid,
-        people=crowd.positions(np.array([0.0]))[0],
-    )
-    go1 = None
-    if args.robot == "go1":
-        print("walking the episodes with the GO1 ...", flush=True)
-        go1 = run_go1(
-            scan,
-            crowd,
-            [e.path for e in episodes],
-            out,
-            width=args.width,
-            height=args.height,
-            vfov=args.vfov,
-            fps=args.fps,
-            options=LeggedOptions(estimate=args.go1_estimate, camera_height=args.go1_camera_height),
-            collision="auto" if args.collision == "none" else args.collision,
+    with staged_outputs(out) as stage:
+        sim = make_simulator(args, "point")
+        scan, crowd = sim.scan(scene), sim.crowd(scene)
+        print(f"havln_mj {__version__}: {scan.description}", flush=True)
+        print(
+            f"people: {len(crowd)}", *(f"{p.text} ({p.region})" for p in crowd.people), sep="\n  "
         )
-    summary = {
-        "havln_mj": __version__,
-        "scene": scan.scene_id,
-        "scene_kind": scan.kind,
-        "description": scan.description,
-        "seed": args.seed,
-        "resolution": [args.width, args.height],
-        "vfov_deg": args.vfov,
-        "collision": world.collision,
-        "people": [
-            {"activity": p.activity, "text": p.text, "region": p.region, "viewpoint": p.viewpoint}
-            for p in crowd.people
-        ],
-        "human_collisions": sum(r["human_collisions"] for r in records),
-        "episodes": records,
-        "steps": sum(r["steps"] for r in records),
-        "frames": frames,
-        "timing": {
-            "scan_load_s": round(t_scan, 3),
-            "world_build_s": round(world.build_seconds, 3),
-            "render_s": round(render_s, 3),
-            "render_fps": round(frames / render_s, 1) if render_s > 0 else None,
-            "total_s": round(time.perf_counter() - t_start, 3),
-        },
-        "files": {"video": str(video_path), "frame": str(frame_path), "topdown": str(map_path)},
-    }
-    if go1 is not None:
-        summary["go1"] = go1
-        summary["files"]["go1_video"] = go1["video"]
-    (out / "summary.json").write_text(json.dumps(summary, indent=1))
-    print(
-        f"wrote {out} ({frames} frames, {summary['steps']} steps, {summary['timing']['total_s']} s)"
-    )
+        episodes = sample_episodes(scan.graph, args.episodes, np.random.default_rng(args.seed))
+        paths = [e.path for e in episodes]
+        point = Recording(sim, crowd, stage / OUTPUTS["video"], args.fps, "point body")
+        records = point.walk_all(scene, paths, walk)
+        sim.close()
+        go1, walked = None, None
+        if args.robot == "go1":
+            print("walking the episodes with the GO1 ...", flush=True)
+            sim = make_simulator(args, "go1")
+            robot = Recording(sim, crowd, stage / OUTPUTS["go1_video"], args.fps, "GO1", True)
+            go1 = robot.compare(scene, paths, walk, records)
+            walked = robot.tracks  # the map shows where the robot really went
+            sim.close()
+        point.write_frame(stage / OUTPUTS["frame"])
+        point.write_map(stage / OUTPUTS["topdown"], scan, args.collision, episodes, records, walked)
+        summary = {
+            "havln_mj": __version__,
+            "scene": scan.scene_id,
+            "scene_kind": scan.kind,
+            "description": scan.description,
+            "seed": args.seed,
+            "resolution": [args.width, args.height],
+            "vfov_deg": args.vfov,
+            "people": [
+                {
+                    "activity": p.activity,
+                    "text": p.text,
+                    "region": p.region,
+                    "viewpoint": p.viewpoint,
+                }
+                for p in crowd.people
+            ],
+            "human_collisions": sum(r["human_collisions"] for r in records),
+            "episodes": records,
+            "steps": sum(r["steps"] for r in records),
+            "frames": point.frames,
+            "timing": {
+                "render_s": round(point.render_s, 3),
+                "render_fps": round(point.frames / point.render_s, 1) if point.render_s else None,
+                "total_s": round(time.perf_counter() - t_start, 3),
+            },
+        }
+        if go1 is not None:
+            summary["go1"] = go1
+        summary = stage.finish(summary)
+    print(f"wrote {out} ({summary['frames']} frames, {summary['steps']} steps)")
     return summary
 
 
@@ -390,6 +324,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except HavlnError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("interrupted: the output folder is as it was before this run", file=sys.stderr)
+        return 130
     return 0
 
 

@@ -19,7 +19,8 @@ from pathlib import Path
 
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.scene.ids import expand_scene_ranges
-from havln_mj.tasks.datasets import Episode, Instruction, load_dataset
+from havln_mj.tasks.datasets import load_dataset
+from havln_mj.tasks.episodes import Episode, Instruction
 from havln_mj.tasks.procedural import procedural_episodes
 
 

@@ -26,8 +26,9 @@ from havln_mj.agents.observations import action_mask, observe
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.sim.egocentric import EgoAction
 from havln_mj.sim.simulator import Simulator
-from havln_mj.tasks.datasets import Instruction
+from havln_mj.tasks.episodes import Instruction
 from havln_mj.tasks.experts import ExpertContext, HumanAwareExpert
+from havln_mj.tasks.step import TaskStep
 from havln_mj.tasks.vocab import Vocabulary
 
 INSTRUCTION_LENGTH = 80  # tokens, as HA3D's encoder reads
@@ -116,7 +117,7 @@ class EgoRollouts:
         self._expert = HumanAwareExpert(mode="local", action_space="ego")
         self._contexts: list[ExpertContext] = []
         self._humans: list[np.ndarray] | None = None
-        self._distance = np.zeros(0)
+        self._task = TaskStep(sim)
 
     def human_positions(self) -> list[np.ndarray]:
         """Every element's people's pelvis positions now (computed once per step)."""
@@ -136,12 +137,7 @@ class EgoRollouts:
             )
         padded = list(instructions) + [instructions[-1]] * (self.batch_size - n)
         episodes = [ins.episode for ins in padded]
-        self.sim.newEpisode(
-            [e.scan for e in episodes],
-            [e.start for e in episodes],
-            [e.heading for e in episodes],
-            [0.0] * self.batch_size,
-        )
+        self._task.start(episodes)
         self.instructions = list(instructions)
         self.done = np.arange(self.batch_size) >= n
         self.steps = np.zeros(self.batch_size, int)
@@ -152,13 +148,6 @@ class EgoRollouts:
         ]
         for ctx in self._contexts:
             self._expert.reset(ctx)
-        states = self.sim.getState()
-        self._distance = np.array(
-            [
-                c.graph.distance(s.location.viewpointId, c.goal)
-                for c, s in zip(self._contexts, states, strict=True)
-            ]
-        )
 
     def encoded_instructions(self, length: int = INSTRUCTION_LENGTH) -> np.ndarray:
         """``(n, length)`` int64 token ids of the running instructions."""
@@ -195,27 +184,19 @@ class EgoRollouts:
                 f"got {actions.tolist()}"
             )
         acted = ~self.done
-        ego = [
-            EgoAction(int(a)) if run else EgoAction.STOP
-            for a, run in zip(actions, acted, strict=True)
-        ]
-        stopped = acted & (actions == EgoAction.STOP)
-        if any(a is not EgoAction.STOP for a in ego):
-            self.sim.makeEgoAction(ego)
+        before = np.array([r.distance for r in self._task.results])
+        results = self._task.step(
+            [EgoAction(int(a)) if run else None for a, run in zip(actions, acted, strict=True)]
+        )
         self._humans = None
-        states = self.sim.getState()
-        distance = self._distance.copy()
-        collided = np.zeros(self.batch_size, bool)
-        for i in np.flatnonzero(acted & ~stopped):
-            distance[i] = self._contexts[i].graph.distance(
-                states[i].location.viewpointId, self._contexts[i].goal
-            )
-            collided[i] = bool(states[i].isCrushed)
-        delta = distance - self._distance
-        self._distance = distance
+        distance = np.array([r.distance for r in results])
+        collided = np.array(
+            [bool(r.collided) and run for r, run in zip(results, acted, strict=True)]
+        )
+        stopped = acted & (actions == EgoAction.STOP)
         self.steps += acted
         self.done = self.done | stopped | (self.steps >= self.max_steps)
-        return StepResult(acted, distance, delta, collided, stopped)
+        return StepResult(acted, distance, distance - before, collided, stopped)
 
 
 def _random_action(mask: np.ndarray, rng: np.random.Generator, last: bool) -> int:

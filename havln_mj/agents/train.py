@@ -50,7 +50,7 @@ from havln_mj.agents.vln_cm import START, VLNCM, sequence_loss
 from havln_mj.cache import atomic_write_bytes, atomic_write_json
 from havln_mj.errors import HavlnError, InvalidArgumentError, MissingDataError
 from havln_mj.paths import cache_dir, project_home
-from havln_mj.tasks.datasets import Instruction
+from havln_mj.tasks.episodes import Instruction
 from havln_mj.tasks.rewards import SUCCESS_DISTANCE, StepOutcome, get_reward, step_reward
 from havln_mj.tasks.vocab import Vocabulary
 

@@ -17,7 +17,7 @@ def build_scenes_ray(
     address: str | None = None,
     num_cpus: float = 1,
 ) -> list[dict]:
-    """Builds scenes as Ray tasks, one per scene, with :func:`havln_mj.cli.build_one`.
+    """Builds scenes as Ray tasks, one per scene, with :func:`havln_mj.sim.prebuild.build_scene`.
 
     Each task builds the scan, its collision geometry (CoACD hulls where ``collision`` asks
     for them) and its world.
@@ -26,15 +26,15 @@ def build_scenes_ray(
     shared cache folder (``$HAVLN_CACHE`` / the scans folder) so later runs find them.
 
     Returns:
-        One row per scene, in the order of ``scene_ids``: ``build_one``'s summary, or
+        One row per scene, in the order of ``scene_ids``: ``build_scene``'s summary, or
         ``{"scene": id, "error": message}`` for a scene that failed.
     """
     ray = ensure_ray(address)
-    from havln_mj.cli import build_one
+    from havln_mj.sim.prebuild import build_scene
 
     def build(scene: str) -> dict:
         try:
-            return build_one(scene, mp3d_dir, connectivity_dir, collision)
+            return build_scene(scene, mp3d_dir, connectivity_dir, collision)
         except Exception as exc:
             return {"scene": scene, "error": f"{type(exc).__name__}: {exc}"}
 

@@ -25,10 +25,10 @@ from collections.abc import Sequence
 import numpy as np
 
 from havln_mj.distributed._ray import ensure_ray
-from havln_mj.errors import HavlnError
+from havln_mj.errors import InvalidArgumentError
 from havln_mj.eval.run import _simulator, make_agent, run_cli
 from havln_mj.eval.run import parse_args as eval_parse_args
-from havln_mj.tasks.datasets import Episode
+from havln_mj.tasks.episodes import Episode
 from havln_mj.tasks.experts import run_expert
 from havln_mj.tasks.metrics import EvalEpisode, Evaluator, MetricConfig
 
@@ -94,7 +94,7 @@ def evaluate_split_ray(
         ``{"summary", "episodes", "submission"}`` as ``evaluate_split`` returns them.
     """
     if workers < 1:
-        raise HavlnError(f"workers must be >= 1, got {workers}")
+        raise InvalidArgumentError(f"workers must be >= 1, got {workers}")
     make_agent(args.agent)  # fail in the driver on a bad agent
     ray = ensure_ray(address)
     items = [

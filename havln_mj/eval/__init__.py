@@ -1,1 +1,1 @@
-"""Evaluation harness (filled by the benchmark issue)."""
+"""Evaluation harness: scores agents and experts on HA-R2R and procedural splits."""

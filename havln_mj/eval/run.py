@@ -37,7 +37,8 @@ from havln_mj.cache import atomic_write_bytes, atomic_write_json
 from havln_mj.errors import HavlnError, InvalidArgumentError
 from havln_mj.scene.ids import expand_scene_ranges
 from havln_mj.sim.simulator import Simulator
-from havln_mj.tasks.datasets import Episode, load_dataset
+from havln_mj.tasks.datasets import load_dataset
+from havln_mj.tasks.episodes import Episode
 from havln_mj.tasks.experts import (
     Expert,
     HumanAwareExpert,

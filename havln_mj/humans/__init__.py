@@ -1,1 +1,1 @@
-"""People in the scene (filled by the humans issue)."""
+"""People in the scene: bodies, motions, activities, crowds, reactions and their drawing."""

@@ -9,11 +9,13 @@ tables; colours are drawn from small palettes of skin tones and clothes.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from havln_mj.errors import InvalidArgumentError
+from havln_mj.humans.outfits import SKIN_TONES
 from havln_mj.humans.skeleton import (
     FOOT_HEIGHT_FRACTION,
     JOINT,
@@ -22,14 +24,9 @@ from havln_mj.humans.skeleton import (
     rest_offsets,
 )
 
-SKIN_TONES = (
-    (0.96, 0.80, 0.69),
-    (0.89, 0.68, 0.53),
-    (0.78, 0.57, 0.42),
-    (0.62, 0.43, 0.30),
-    (0.45, 0.31, 0.21),
-    (0.33, 0.22, 0.15),
-)
+if TYPE_CHECKING:
+    from havln_mj.humans.anny_mujoco import AnnyLook
+
 CLOTHES = (
     (0.80, 0.15, 0.15),
     (0.15, 0.35, 0.75),
@@ -72,12 +69,13 @@ class BodyShape:
     """A person's size and look.
 
     Attributes:
-        height: Standing height in metres (1.5–1.95).
+        height: Standing height in metres (1.0–1.95).
         girth: Limb and trunk thickness relative to average build (0.85–1.25).
         skin: Skin RGB.
         top: Shirt RGB.
         bottom: Trousers RGB.
         shoes: Shoe RGB.
+        look: An Anny body and outfit to draw instead of the capsules (None: capsules).
     """
 
     height: float
@@ -86,6 +84,7 @@ class BodyShape:
     top: tuple[float, float, float] = CLOTHES[1]
     bottom: tuple[float, float, float] = TROUSERS[0]
     shoes: tuple[float, float, float] = SHOES[0]
+    look: AnnyLook | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         if not MIN_HEIGHT <= self.height <= MAX_HEIGHT:
@@ -97,11 +96,14 @@ class BodyShape:
 
     @property
     def offsets(self) -> np.ndarray:
-        """Rest joint offsets ``(24, 3)`` (see ``skeleton.rest_offsets``)."""
-        return rest_offsets(self.height)
+        """Rest joint offsets ``(24, 3)``: the Anny body's, else ``skeleton.rest_offsets``."""
+        return self.look.rig.offsets if self.look is not None else rest_offsets(self.height)
 
     def colour(self, part: str) -> tuple[float, float, float]:
-        """RGB of a body part."""
+        """RGB of a body part (the Anny look's outfit, when there is one)."""
+        if self.look is not None:
+            o = self.look.outfit
+            return {"skin": o.skin, "top": o.top, "bottom": o.bottom_rgb, "shoes": o.shoes}[part]
         return {"skin": self.skin, "top": self.top, "bottom": self.bottom, "shoes": self.shoes}[
             part
         ]

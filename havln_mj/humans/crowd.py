@@ -135,9 +135,18 @@ class Crowd:
         """
         times = np.atleast_1d(np.asarray(times, float))
         k = slice(None) if people is None else np.asarray(people, int)
+        return self.positions_at(times[:, None] + np.zeros(len(self._start[k])), k)
+
+    def positions_at(self, clock: np.ndarray, people: slice | np.ndarray) -> np.ndarray:
+        """Pelvis positions ``(n, P, 3)`` with each person's own clock ``(n, P)`` (seconds).
+
+        ``people`` selects the P people (a slice or indices); a person's clock replaces the
+        simulated time (reacting people run late, see :mod:`havln_mj.humans.reactions`).
+        """
+        k = people
         # Clip.frame_time for all people at once: loop from loop_start past the last frame
         # (simulated time and start offsets are never negative).
-        f = (times[:, None] + self._start[k]) * self._fps[k]
+        f = (clock + self._start[k]) * self._fps[k]
         last, loop = self._last[k], self._loop[k]
         period = last - loop
         wrapped = loop + np.mod(f - loop, np.maximum(period, 1.0))
@@ -161,31 +170,36 @@ class Crowd:
 
     def pose(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """World joint positions ``(N, 24, 3)`` and orientations ``(N, 24, 4)`` at time ``t``."""
+        return self.pose_at(np.full(len(self.people), float(t)))
+
+    def pose_at(self, clock: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """World joint poses (as :meth:`pose`) with each person's own clock ``(N,)``."""
         n = len(self.people)
         pos = np.empty((n, 24, 3))
         quat = np.empty((n, 24, 4))
         if self._rotational:
             ks = self._rotational
-            local, root_w = self._world_rooted(ks, t)
+            local, root_w = self._world_rooted(ks, clock)
             pos[ks], quat[ks] = forward_kinematics(self._offsets[ks], local, root_w)
         for k in self._segments:
-            joints, _ = self.people[k].clip.sample(t + self._start[k])
+            joints, _ = self.people[k].clip.sample(clock[k] + self._start[k])
             world = self._anchor[k] + joints @ self._yaw_m[k].T
             pos[k] = world
             quat[k] = segment_orientations(world, self._offsets[k])
         return pos, quat
 
-    def _world_rooted(self, ks: list[int], t: float) -> tuple[np.ndarray, np.ndarray]:
-        """Poses of people ``ks`` (rotation clips) at time ``t``, rooted in the world.
+    def _world_rooted(self, ks: list[int], t: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Poses of people ``ks`` (rotation clips) at time ``t`` (or clocks ``(N,)``), rooted.
 
         Returns:
             Local rotations ``(K, 24, 4)`` with the pelvis turned into the world, and world
             pelvis positions ``(K, 3)``.
         """
         q0, q1, w, root = [], [], [], []
+        clock = np.broadcast_to(np.asarray(t, float), (len(self.people),))
         for k in ks:
             clip = self.people[k].clip
-            i0, i1, wk = clip.blend_frames(float(t + self._start[k]))
+            i0, i1, wk = clip.blend_frames(float(clock[k] + self._start[k]))
             q0.append(clip.local[i0])
             q1.append(clip.local[i1])
             w.append(wk)

@@ -1,7 +1,10 @@
 """People in a MuJoCo world: one mocap body per joint, posed every frame from world poses.
 
 Each person ``k`` adds 24 mocap bodies ``human<k>/<joint>`` (direct children of the world,
-as MuJoCo requires of mocap bodies) carrying the body's geoms (``human<k>/<joint>/<i>``).
+as MuJoCo requires of mocap bodies) carrying the body's geoms: the capsule body's
+(``human<k>/<joint>/<i>``), or for a shape with an Anny look the textured pieces of its mesh
+(``human<k>/<joint>/anny``, see :mod:`havln_mj.humans.anny_mujoco`); solid Anny people keep
+their capsules for contacts, invisible (alpha 0).
 The geoms make no contacts (``contype = conaffinity = 0``; the HA-VLN collision signal is a
 distance, computed analytically) unless asked to be solid, and sit in their own geom group,
 ``groups.HUMANS``, so cameras see them and collision queries can leave them out. Until
@@ -16,10 +19,13 @@ import mujoco
 import numpy as np
 
 from havln_mj import groups
+from havln_mj.errors import InvalidArgumentError
+from havln_mj.humans.anny_mujoco import add_anny_pieces, add_anny_skinned
 from havln_mj.humans.body import BodyShape
 from havln_mj.humans.skeleton import JOINT_NAMES, NUM_JOINTS
 from havln_mj.humans.skinned import Skin, add_skin
 
+FILLER_SHRINK = 0.6  # capsule fillers inside rigid Anny pieces, relative to the mannequin
 PARK_Z = -100.0  # metres: where unposed people wait, out of every camera's view
 _GEOM = {
     "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE,
@@ -33,26 +39,51 @@ def body_name(person: int, joint: int) -> str:
     return f"human{person}/{JOINT_NAMES[joint]}"
 
 
+DRAW_STYLES = ("pieces", "skinned", "capsules")
+"""How people with an Anny look are drawn: rigid textured pieces on the joint bodies (no
+per-frame upload), one mesh skinned every frame, or the capsule mannequins."""
+
+
 def add_people(
     spec: mujoco.MjSpec,
     shapes: list[BodyShape],
     skins: Sequence[Skin | None] = (),
     solid: bool = False,
+    style: str = "pieces",
 ) -> None:
     """Adds the mocap bodies and geoms of ``shapes`` (person k = ``shapes[k]``) to ``spec``.
 
     A person with a skin (``skins[k]``) is drawn as that mesh (in their top's colour) and
-    their joint bodies carry no geoms. ``solid`` makes the built-in bodies' geoms collide
-    (``contype = conaffinity = 1``), so they push a simulated robot; it must be chosen before
-    compiling, since MuJoCo aggregates contact bits per body then.
+    their joint bodies carry no geoms. A shape with an Anny look is drawn as ``style`` says
+    (:data:`DRAW_STYLES`). ``solid`` makes the capsule geoms collide (``contype =
+    conaffinity = 1``), so they push a simulated robot; it must be chosen before compiling,
+    since MuJoCo aggregates contact bits per body then.
+
+    Raises:
+        InvalidArgumentError: ``style`` is not one of :data:`DRAW_STYLES`.
     """
+    if style not in DRAW_STYLES:
+        raise InvalidArgumentError(f"people style {style!r} unknown; valid: {DRAW_STYLES}")
     skins = list(skins) + [None] * (len(shapes) - len(skins))
     for k, (shape, skin) in enumerate(zip(shapes, skins, strict=True)):
         if skin is not None:
             add_skin(spec, k, skin, shape.top, PARK_Z)
-        pieces = shape.pieces() if skin is None else []
-        for j in range(NUM_JOINTS):
-            body = spec.worldbody.add_body(name=body_name(k, j), mocap=True, pos=(0.0, 0.0, PARK_Z))
+        look = shape.look if skin is None and style != "capsules" else None
+        # Rigid Anny pieces keep thinner capsules inside as fillers: where a bent joint opens
+        # a crease between two pieces, the filler shows clothes or skin, not the room behind.
+        filler = look is not None and style == "pieces"
+        pieces = shape.pieces() if skin is None and (look is None or solid or filler) else []
+        bodies = [
+            spec.worldbody.add_body(name=body_name(k, j), mocap=True, pos=(0.0, 0.0, PARK_Z))
+            for j in range(NUM_JOINTS)
+        ]
+        if look is not None and style == "pieces":
+            add_anny_pieces(spec, f"human{k}", bodies, look)
+        elif look is not None:
+            add_anny_skinned(spec, f"human{k}", bodies[0], look, PARK_Z)
+        alpha = 0.0 if look is not None and not filler else 1.0  # skinned: contacts only
+        shrink = FILLER_SHRINK if filler else 1.0
+        for j, body in enumerate(bodies):
             for i, piece in enumerate(p for p in pieces if p.joint == j):
                 geom = body.add_geom(
                     name=f"{body_name(k, j)}/{i}",
@@ -60,15 +91,16 @@ def add_people(
                     contype=int(solid),
                     conaffinity=int(solid),
                     group=groups.HUMANS,
-                    rgba=(*shape.colour(piece.part), 1.0),
+                    rgba=(*shape.colour(piece.part), alpha),
                     mass=0.0,
                 )
                 if piece.kind == "capsule":
                     geom.fromto = (*piece.a, *piece.b)
-                    geom.size = (piece.size[0], 0.0, 0.0)
+                    geom.size = (shrink * piece.size[0], 0.0, 0.0)
                 else:
                     geom.pos = piece.a
-                    geom.size = (*piece.size, *(0.0,) * (3 - len(piece.size)))
+                    size = np.array(piece.size) * shrink
+                    geom.size = (*size, *(0.0,) * (3 - len(size)))
 
 
 class PeopleWriter:

@@ -28,14 +28,19 @@ import numpy as np
 
 from havln_mj.errors import MalformedDataError, MissingDataError
 from havln_mj.frames import heading_to
+from havln_mj.humans.anny_data import load_anny_catalog
+from havln_mj.humans.anny_mujoco import AnnyLook
+from havln_mj.humans.anny_rig import fit
 from havln_mj.humans.body import BodyShape, random_body
 from havln_mj.humans.catalog import HA3D_REGIONS, Activity, Catalog, load_catalog, make_clip
 from havln_mj.humans.clip import Clip
 from havln_mj.humans.crowd import Crowd, Person
 from havln_mj.humans.loaders import LoadedMotion, haps_dir_name
+from havln_mj.humans.outfits import random_outfit
 from havln_mj.humans.skeleton import MAX_HEIGHT, MIN_HEIGHT
 from havln_mj.humans.skinned import Skin
 from havln_mj.humans.smpl_model import SmplModel
+from havln_mj.humans.together import conversation, handover, side_by_side
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.regions import Regions, SceneObject
 from havln_mj.scene.scan import Scan
@@ -54,10 +59,13 @@ class Sources:
     Attributes:
         haps: HAPS motions by prompt folder name (``loaders.load_haps_folder``), or None.
         smpl: An SMPL model to skin people with, or None.
+        anny: Draw people as bodies of the shipped Anny catalog, dressed (else as capsule
+            mannequins); an SMPL model takes precedence.
     """
 
     haps: dict[str, list[LoadedMotion]] | None = None
     smpl: SmplModel | None = None
+    anny: bool = True
 
     def haps_for_region(self, code: str) -> list[LoadedMotion]:
         """The HAPS motions whose prompt's region is ``code``."""
@@ -78,6 +86,24 @@ def _letters(text: str) -> str:
 
 # HAPS folder names replace ' ' and '/' by '_': match their regions on letters only.
 _HAPS_REGION = {_letters(name): code for name, code in HA3D_REGIONS.items()}
+
+
+def anny_shape(rng: np.random.Generator, base: BodyShape | None = None) -> BodyShape:
+    """A random catalog body, fitted and dressed, as a shape (its height fits its clips).
+
+    Args:
+        rng: The source of the choice of body, outfit and fabric.
+        base: Shape whose girth the capsule stand-in keeps (default: average).
+    """
+    catalog = load_anny_catalog()
+    body = catalog.bodies[int(rng.integers(len(catalog)))]
+    outfit = random_outfit(rng, body)
+    rig = fit(body)
+    look = AnnyLook(rig, outfit, int(rng.integers(2**31)))
+    girth = base.girth if base is not None else 1.0
+    return BodyShape(
+        rig.clip_height, girth, outfit.skin, outfit.top, outfit.bottom_rgb, outfit.shoes, look
+    )
 
 
 def people_count(regions: Regions) -> int:
@@ -134,9 +160,14 @@ class _Builder:
     def __init__(self, rng: np.random.Generator, sources: Sources | None) -> None:
         self.rng = rng
         self.sources = sources or Sources()
+        # Looks come from a child stream: choosing bodies and clothes leaves the placement
+        # and motion draws of ``rng`` as they were.
+        self.looks = rng.spawn(1)[0]
 
     def body(self) -> tuple[BodyShape, Skin | None]:
         shape = random_body(self.rng)
+        if self.sources.anny and self.sources.smpl is None:
+            return anny_shape(self.looks, shape), None
         skin = self.sources.skin(self.rng)
         if skin is not None:
             # Motions are made for the skin's own height, so its feet meet the floor.
@@ -180,6 +211,7 @@ def populate(
     catalog: Catalog | None = None,
     count: int | None = None,
     sources: Sources | None = None,
+    together: float = 0.0,
 ) -> Crowd:
     """People placed in ``scan`` by HA3D's rule.
 
@@ -189,6 +221,9 @@ def populate(
         catalog: Activities by region (default: the built-in catalog).
         count: Head count (default: ``people_count``).
         sources: User-supplied motions and SMPL model.
+        together: Chance that a placed person is joined by others (a conversation of two or
+            three, someone handing them something, a companion walking beside them; see
+            :mod:`havln_mj.humans.together`). 0 keeps HA3D's one person per spot.
     """
     catalog = catalog or load_catalog()
     build = _Builder(rng, sources)
@@ -223,7 +258,7 @@ def populate(
                 break
         else:
             continue  # nothing this region offers fits here
-        anchor, text = np.array([pos[0], pos[1], floor]), ""
+        anchor, text, path = np.array([pos[0], pos[1], floor]), "", None
         if activity.needs_seat:
             seat = min(seats, key=lambda o: np.linalg.norm(o.bbox[:2] - pos[:2]))
             used_seats.add(seat.index)
@@ -244,8 +279,32 @@ def populate(
                 text = clip.name.split(":", 1)[-1]
             else:
                 clip = make_clip(activity, body[0].height, rng)
-        people.append(build.person(body, clip, anchor, heading, activity, vp, text))
+        person = build.person(body, clip, anchor, heading, activity, vp, text)
+        if together > 0 and not activity.needs_seat and rng.random() < together:
+            people += _group(person, activity, path, build)
+        else:
+            people.append(person)
     return Crowd(people)
+
+
+def _group(person: Person, activity: Activity, path: np.ndarray | None, build: _Builder):
+    """``person`` joined by others: walking beside them, or talking or handing something."""
+    rng = build.rng
+
+    def body() -> BodyShape:
+        return build.body()[0]
+
+    if path is not None:
+        d = path[-1] - path[0]
+        side = np.array([d[1], -d[0]]) / max(float(np.linalg.norm(d)), 1e-9)
+
+        def beside(height: float, offset: float):
+            return make_clip(activity, height, rng, path=path + offset * side)
+
+        return side_by_side(person, rng, body, beside)
+    if rng.random() < 0.3:
+        return handover(person, rng, body)
+    return conversation(person, rng, body, int(rng.integers(2, 4)))
 
 
 def read_ha3d_placements(path: Path | str) -> dict[str, dict[str, tuple[str, int, float]]]:

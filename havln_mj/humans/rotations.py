@@ -238,3 +238,19 @@ def yaw(angle: np.ndarray | float) -> np.ndarray:
 def from_heading(heading: np.ndarray | float) -> np.ndarray:
     """The body orientation of a person facing ``heading`` (from +y, turning right)."""
     return yaw(-np.asarray(heading, float))
+
+
+def swing(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Smallest rotations taking directions ``a`` to ``b`` (``(..., 3)`` each)."""
+    a = a / np.maximum(np.linalg.norm(a, axis=-1, keepdims=True), _EPS)
+    b = b / np.maximum(np.linalg.norm(b, axis=-1, keepdims=True), _EPS)
+    w = 1.0 + np.sum(a * b, axis=-1, keepdims=True)
+    q = np.concatenate([w, np.cross(a, b)], axis=-1)
+    # Opposite directions: turn half a circle about any axis normal to a.
+    opposite = w[..., 0] < 1e-9
+    if np.any(opposite):
+        normal = np.cross(a, [1.0, 0.0, 0.0])
+        small = np.linalg.norm(normal, axis=-1) < 1e-6
+        normal[small] = np.cross(a[small], [0.0, 1.0, 0.0])
+        q[opposite] = np.concatenate([np.zeros_like(w), normal], axis=-1)[opposite]
+    return normalize(q)

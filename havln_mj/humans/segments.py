@@ -38,22 +38,6 @@ def _frame(up: np.ndarray, side: np.ndarray) -> np.ndarray:
     return np.stack([x, y, z], axis=-1)
 
 
-def _swing(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Smallest rotations taking directions ``a`` to ``b`` (``(..., 3)`` each)."""
-    a = a / np.maximum(np.linalg.norm(a, axis=-1, keepdims=True), 1e-12)
-    b = b / np.maximum(np.linalg.norm(b, axis=-1, keepdims=True), 1e-12)
-    w = 1.0 + np.sum(a * b, axis=-1, keepdims=True)
-    q = np.concatenate([w, np.cross(a, b)], axis=-1)
-    # Opposite directions: turn half a circle about any axis normal to a.
-    opposite = w[..., 0] < 1e-9
-    if np.any(opposite):
-        normal = np.cross(a, [1.0, 0.0, 0.0])
-        small = np.linalg.norm(normal, axis=-1) < 1e-6
-        normal[small] = np.cross(a[small], [0.0, 1.0, 0.0])
-        q[opposite] = np.concatenate([np.zeros_like(w), normal], axis=-1)[opposite]
-    return rot.normalize(q)
-
-
 def segment_orientations(positions: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     """World orientations ``(..., 24, 4)`` of the pieces for joint positions ``(..., 24, 3)``.
 
@@ -76,5 +60,5 @@ def segment_orientations(positions: np.ndarray, offsets: np.ndarray) -> np.ndarr
             now = _frame(bone, side)
             quats[..., j, :] = rot.from_matrix(now @ np.swapaxes(rest, -1, -2))
         else:
-            quats[..., j, :] = _swing(np.broadcast_to(offsets[child], bone.shape), bone)
+            quats[..., j, :] = rot.swing(np.broadcast_to(offsets[child], bone.shape), bone)
     return quats

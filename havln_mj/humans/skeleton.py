@@ -57,7 +57,7 @@ SMPL_TO_BODY = np.array([[-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
 """Maps SMPL-frame vectors (y up, facing +z, +x = left) to the body frame (z up, facing +y)."""
 SMPL_TO_BODY_QUAT = rot.from_matrix(SMPL_TO_BODY)
 
-MIN_HEIGHT, MAX_HEIGHT = 1.5, 1.95
+MIN_HEIGHT, MAX_HEIGHT = 1.0, 1.95  # children of about 6 years up to tall adults
 
 # Rest (T-pose) joint positions as fractions of height: (x to the right, y forward, z up),
 # feet on z = 0. Heights of hip, knee, ankle, shoulder and the arm segment lengths follow the

@@ -47,7 +47,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from havln_mj.errors import InvalidArgumentError, did_you_mean
+from havln_mj.errors import ClosedError, InvalidArgumentError, did_you_mean
 from havln_mj.render import gl
 
 MAX_SIZE = 8192
@@ -310,7 +310,7 @@ class Camera:
             RuntimeError: If the camera is closed.
         """
         if self._closed or self._ctx is None or self._handle is None:
-            raise RuntimeError("render() called on a closed Camera")
+            raise ClosedError("render() called on a closed Camera")
         if not (rgb or depth):
             raise InvalidArgumentError("render() needs rgb=True or depth=True (both are False)")
         self._handle.make_current()
@@ -334,7 +334,7 @@ class Camera:
     def upload_mesh(self, mesh_id: int) -> None:
         """Re-sends a mesh whose vertices changed in the model to this camera's GL context."""
         if self._closed or self._ctx is None or self._handle is None:
-            raise RuntimeError("upload_mesh() called on a closed Camera")
+            raise ClosedError("upload_mesh() called on a closed Camera")
         self._handle.make_current()
         mujoco.mjr_uploadMesh(self._model, self._ctx, int(mesh_id))
 
@@ -345,7 +345,7 @@ class Camera:
         colour), decoded back to geom ids. Same preconditions as :meth:`render`.
         """
         if self._closed or self._ctx is None or self._handle is None:
-            raise RuntimeError("render_geom_ids() called on a closed Camera")
+            raise ClosedError("render_geom_ids() called on a closed Camera")
         self._handle.make_current()
         self._model.cam_fovy[self._cam_id] = self._vfov
         mujoco.mjv_updateScene(

@@ -1,1 +1,1 @@
-"""Agent bodies: the kinematic point body (and, later, the GO1 quadruped)."""
+"""Robot models and controllers: the kinematic point body's rig and the GO1 quadruped."""

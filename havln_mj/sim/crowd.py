@@ -7,11 +7,12 @@ people uses :data:`NO_CROWD`.
 
 Collision (the HA-VLN signal): the agent is within ``distance`` (default 1 m) of a person,
 measured horizontally from the agent's base to the person's pelvis, at any time during an
-action. Actions are sampled at :data:`SAMPLE_HZ` or faster, both ends included, so a person
-passing through the agent's path mid-action is caught. An action's move is a straight segment,
-or a polyline where the edge is walked by a route (graph proxies). Only people whose whole
-pelvis track (:meth:`Crowd.footprint`) comes within :data:`NEAR_M` of the action's path are
-sampled; the smallest distance reported is exact below ``NEAR_M`` and ``inf`` above.
+action. A body reports its base's track over the action as knots (piecewise linear: a point
+body's straight move then its turn in place, a robot's trunk at every controller tick); the
+track is sampled at :data:`SAMPLE_HZ` or faster, every knot included, so a person passing
+through the agent's path mid-action is caught. Only people whose whole pelvis track
+(:meth:`Crowd.footprint`) comes within :data:`NEAR_M` of the track are sampled; the smallest
+distance reported is exact below ``NEAR_M`` and ``inf`` above.
 """
 
 from __future__ import annotations
@@ -122,32 +123,24 @@ class Proximity:
 NO_PROXIMITY = Proximity(False, (), math.inf)
 
 
-def action_samples(
-    path: np.ndarray, t0: float, move_s: float, total_s: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Times and agent positions along an action: a move, then turning in place.
+def sample_knots(knots: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Times and positions along a track given by its knots, at :data:`SAMPLE_HZ` or faster.
 
     Args:
-        path: ``(K, 3)`` points, K ≥ 2: the move runs along this polyline (a straight move is
-            its two ends) at constant speed.
-        t0: Simulated time at the action's start.
-        move_s: How long the move lasts.
-        total_s: How long the action lasts (the turn follows the move).
+        knots: ``(n, 4)`` rows ``(t, x, y, z)`` with non-decreasing ``t``; the track is linear
+            between rows.
 
     Returns:
-        ``(times (n,), positions (n, 3))`` at :data:`SAMPLE_HZ` or faster, both ends included.
+        ``(times (m,), positions (m, 3))``: every knot, plus evenly spaced samples between
+        the first and the last time at least :data:`SAMPLE_HZ` per second.
     """
-    path = np.asarray(path, float)
-    n = max(2, math.ceil(total_s * SAMPLE_HZ) + 1)
-    times = np.arange(n) * (total_s / (n - 1))
-    frac = np.clip(times / move_s, 0.0, 1.0) if move_s > 0 else np.ones(n)
-    if len(path) == 2:
-        positions = path[0] + frac[:, None] * (path[1] - path[0])
-    else:
-        run = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(path, axis=0), axis=1))])
-        at = frac * run[-1]
-        positions = np.column_stack([np.interp(at, run, path[:, i]) for i in range(3)])
-    return t0 + times, positions
+    t = knots[:, 0]
+    if len(knots) == 1 or t[-1] <= t[0]:
+        return t[-1:], knots[-1:, 1:]
+    n = max(2, math.ceil((t[-1] - t[0]) * SAMPLE_HZ) + 1)
+    times = np.union1d(t, np.linspace(t[0], t[-1], n))
+    positions = np.column_stack([np.interp(times, t, knots[:, i]) for i in (1, 2, 3)])
+    return times, positions
 
 
 def _near(crowd: Crowd, path: np.ndarray, reach: float) -> list[int]:
@@ -156,7 +149,7 @@ def _near(crowd: Crowd, path: np.ndarray, reach: float) -> list[int]:
     legs = [
         (float(a[0]), float(a[1]), float(b[0]) - float(a[0]), float(b[1]) - float(a[1]))
         for a, b in itertools.pairwise(path)
-    ]
+    ] or [(float(path[0][0]), float(path[0][1]), 0.0, 0.0)]
     out = []
     # Plain floats: a handful of people is faster this way than through numpy.
     for k, ((cx, cy), r) in enumerate(zip(centres.tolist(), radii.tolist(), strict=True)):
@@ -170,32 +163,26 @@ def _near(crowd: Crowd, path: np.ndarray, reach: float) -> list[int]:
     return out
 
 
-def proximity(
+def knots_proximity(
     crowd: Crowd,
-    path: np.ndarray | Sequence[Sequence[float]],
-    t0: float,
-    move_s: float,
-    total_s: float,
+    knots: np.ndarray | Sequence[Sequence[float]],
     distance: float = COLLISION_DISTANCE,
 ) -> Proximity:
-    """The collision signal of an action, people far from it left out.
+    """The collision signal of a body's track, people far from it left out.
 
     Args:
         crowd: The people.
-        path: ``(K, 3)`` points, K ≥ 2: the action moves along this polyline from its first
-            point to its last (a straight move is its two ends) in ``move_s`` seconds, then
-            turns in place until ``total_s``.
-        t0: Simulated time at the action's start.
-        move_s: How long the move lasts.
-        total_s: How long the action lasts.
+        knots: The track of the body's base: rows ``(t, x, y, z)``, linear between rows (one
+            row: an instant, e.g. an episode's start state).
         distance: Collision threshold (metres, horizontal).
     """
     if len(crowd) == 0:
         return NO_PROXIMITY
-    near = _near(crowd, path, max(NEAR_M, distance))
+    knots = np.asarray(knots, float).reshape(-1, 4)
+    near = _near(crowd, knots[:, 1:], max(NEAR_M, distance))
     if not near:
         return NO_PROXIMITY
-    times, positions = action_samples(path, t0, move_s, total_s)
+    times, positions = sample_knots(knots)
     return track_proximity(crowd, times, positions, distance, near)
 
 

@@ -18,10 +18,18 @@ GO1, compiled once; each batch element is a :class:`LeggedAgent` with its own ``
   HA-VLN collision signal (1 m, horizontal, trunk to pelvis) is sampled along the whole action
   at every controller tick (≥ 16 Hz).
 * **Falls** end the episode: a fallen element ignores further actions and reports ``fell``.
+* **Divergence**: after every controller tick MuJoCo's warning counters are read (bad
+  positions, velocities or accelerations, full contact or constraint buffers). When physics
+  diverges MuJoCo resets the state, so the robot would appear elsewhere: the action stops
+  there, and the element reports ``diverged`` and ends as a fall does.
+
+:class:`~havln_mj.sim.legged_body.LeggedBody` puts this behind the simulator's Body seam.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 
@@ -31,15 +39,13 @@ import numpy as np
 from havln_mj import groups
 from havln_mj.frames import heading_to, wrap_angle
 from havln_mj.humans.mujoco_people import PeopleWriter, add_people
-from havln_mj.render.camera import Camera
+from havln_mj.nav import NavGrid, build_navgrids
 from havln_mj.robot.go1.model import add_go1
 from havln_mj.robot.go1.primitives import Go1Body, OnTick, PrimitiveResult
 from havln_mj.scene.navgraph import LEVEL_GAP
-from havln_mj.scene.navgrid import NavGrid, build_navgrids
 from havln_mj.scene.proxy.routes import route_floor_points
 from havln_mj.scene.scan import Scan, floor_heights
-from havln_mj.sim.crowd import NO_CROWD, Crowd, Proximity, track_proximity
-from havln_mj.sim.rendering import View, ViewSettings, shoot
+from havln_mj.sim.crowd import NO_CROWD, Crowd, Proximity, knots_proximity
 from havln_mj.sim.world import WorldOptions, build_world, world_spec
 
 PREFIX = "go1/"
@@ -71,24 +77,33 @@ class LeggedOptions:
 
 
 @dataclass
-class Outcome:
-    """What one action did to a legged agent.
+class WalkResult:
+    """What one run of primitives did to a legged agent.
 
     Attributes:
         duration: Physics seconds.
         fell: The robot fell.
-        contact: The HA-VLN collision signal over the action (None without people).
+        diverged: The physics diverged (see the module docstring).
         human_contacts: Most robot–person contacts at once (solid people only).
         primitives: The primitives run.
         track: Trunk positions ``(n, 4)`` of ``(t, x, y, z)`` at every controller tick.
+        crowd: The people, for :attr:`contact`.
     """
 
     duration: float = 0.0
     fell: bool = False
-    contact: Proximity | None = None
+    diverged: bool = False
     human_contacts: int = 0
     primitives: list[PrimitiveResult] | None = None
     track: np.ndarray | None = None
+    crowd: Crowd = NO_CROWD
+
+    @functools.cached_property
+    def contact(self) -> Proximity | None:
+        """The HA-VLN collision signal over the walk (None without people)."""
+        if not len(self.crowd) or self.track is None:
+            return None
+        return knots_proximity(self.crowd, self.track)
 
 
 class LeggedWorld:
@@ -102,7 +117,13 @@ class LeggedWorld:
         if collision == "none":
             collision = "auto"  # a legged robot needs floors to stand on
         spec, self.collision, _ = world_spec(scan, _with_collision(world_options, collision))
-        add_people(spec, crowd.shapes, crowd.skins, solid=options.physical_humans)
+        add_people(
+            spec,
+            crowd.shapes,
+            crowd.skins,
+            solid=options.physical_humans,
+            style=world_options.people_style,
+        )
         start = scan.graph.nodes[0]
         x, y, _ = scan.graph.position(start)
         self.handles = add_go1(
@@ -185,14 +206,7 @@ def _add_chase_camera(spec: mujoco.MjSpec, trunk: str) -> None:
 
 
 def _with_collision(options: WorldOptions, collision: str) -> WorldOptions:
-    return WorldOptions(
-        collision=collision,
-        coacd=options.coacd,
-        collision_band=options.collision_band,
-        collision_chunk=options.collision_chunk,
-        offscreen=options.offscreen,
-        vfov_deg=options.vfov_deg,
-    )
+    return dataclasses.replace(options, collision=collision)
 
 
 class LeggedAgent:
@@ -204,6 +218,7 @@ class LeggedAgent:
         self.body = Go1Body(world.model, self.data, PREFIX, world.options.estimate)
         self.people = PeopleWriter(world.model, len(world.crowd.shapes))
         self.fell = False
+        self.diverged = False
 
     # --------------------------------------------------------------------- state
 
@@ -221,6 +236,7 @@ class LeggedAgent:
         self.pose_people(t)
         self.body.reset(float(position[0]), float(position[1]), float(floor_z), heading)
         self.fell = self.body.fallen
+        self.diverged = False
 
     def pose_people(self, t: float) -> None:
         """Writes the people's poses at simulated time ``t`` into this agent's data."""
@@ -231,7 +247,7 @@ class LeggedAgent:
 
     def run(
         self, plan: list[tuple[str, float]], t0: float, on_tick: OnTick | None = None
-    ) -> Outcome:
+    ) -> WalkResult:
         """Runs primitives ``("forward", m)``, ``("turn", rad)``, ``("stand", s)`` from ``t0``.
 
         ``on_tick(t)`` is called at every controller tick with the simulated time.
@@ -244,7 +260,7 @@ class LeggedAgent:
         final_heading: float | None,
         t0: float,
         on_tick: OnTick | None = None,
-    ) -> Outcome:
+    ) -> WalkResult:
         """Walks to a floor point, then turns to ``final_heading``.
 
         Turn to face the point, walk the distance, and once more if still too far; None as
@@ -277,16 +293,20 @@ class LeggedAgent:
 
         return self._execute(script, t0, on_tick)
 
-    def _execute(self, script, t0: float, on_tick: OnTick | None = None) -> Outcome:
-        if self.fell:
-            return Outcome(fell=True, contact=None)
+    def _execute(self, script, t0: float, on_tick: OnTick | None = None) -> WalkResult:
+        crowd = self.world.crowd
+        if self.fell or self.diverged:
+            track = np.array([[t0, *self.position()]])
+            return WalkResult(fell=self.fell, diverged=self.diverged, track=track, crowd=crowd)
         d = self.data
         start_time = d.time
         times, points, touches = [t0], [self.position()], [0]
-        crowd = self.world.crowd
         physical = self.world.options.physical_humans
+        warnings0 = _warning_counts(d)
 
         def tick(physics_time: float) -> None:
+            if _warning_counts(d) != warnings0:
+                raise _DivergedError
             t = t0 + physics_time - start_time
             if physical:
                 self.pose_people(t)  # solid people must move with the physics
@@ -306,16 +326,26 @@ class LeggedAgent:
                 return self.body.stand(amount, on_tick=tick)
             return self.body.turn(amount, on_tick=tick)
 
-        results = [r for r in script(do) if r is not None]
-        duration = d.time - start_time
-        tick(d.time)
-        self.fell = self.body.fallen
-        times_a, points_a = np.array(times), np.array(points)
-        contact = None
-        if len(crowd) and crowd is not NO_CROWD:
-            contact = track_proximity(crowd, times_a, points_a)
-        track = np.column_stack([times_a, points_a])
-        return Outcome(duration, self.fell, contact, int(max(touches)), results, track)
+        done: list[PrimitiveResult] = []
+        try:
+            done = script(do)
+            if _warning_counts(d) != warnings0:
+                raise _DivergedError
+            tick(d.time)
+        except _DivergedError:
+            # MuJoCo has reset the state: the pose is no longer the robot's, keep the last.
+            self.diverged = True
+        self.fell = self.body.fallen or self.diverged
+        track = np.column_stack([np.array(times), np.array(points)])
+        return WalkResult(
+            d.time - start_time,
+            self.fell,
+            self.diverged,
+            int(max(touches)),
+            [r for r in done if r is not None],
+            track,
+            crowd,
+        )
 
     def _human_contacts(self) -> int:
         """Robot–person contacts in the current physics state."""
@@ -332,45 +362,21 @@ class LeggedAgent:
         )
 
 
-class LeggedView:
-    """Renders an agent's view from the robot's camera, in the agent's own physics state."""
+class _DivergedError(Exception):
+    """Raised inside a primitive's tick when MuJoCo reports diverged physics."""
 
-    def __init__(self, world: LeggedWorld) -> None:
-        self.world = world
-        self._camera: Camera | None = None
-        self._settings: ViewSettings | None = None
-        cam = world.model.camera(world.camera)
-        self._cam_id, self._base_quat = cam.id, world.model.cam_quat[cam.id].copy()
-        self._human_geoms = world.model.geom_group == groups.HUMANS
 
-    def render(
-        self, agent: LeggedAgent, settings: ViewSettings, elevation: float, t: float
-    ) -> View:
-        """The view at simulated time ``t``, the camera pitched by ``elevation`` (radians)."""
-        model = self.world.model
-        if self._camera is None or settings != self._settings:
-            if self._camera is not None:
-                self._camera.close()
-            self._camera = Camera(
-                model, self.world.camera, settings.width, settings.height,
-                math.degrees(settings.vfov),
-            )  # fmt: skip
-            self._settings = settings
-        agent.pose_people(t)
-        # The camera looks along its −z with +y up: pitching up turns it about its +x.
-        pitch = np.array([math.cos(elevation / 2), math.sin(elevation / 2), 0.0, 0.0])
-        quat = np.empty(4)
-        mujoco.mju_mulQuat(quat, self._base_quat, pitch)
-        model.cam_quat[self._cam_id] = quat
-        mujoco.mj_kinematics(model, agent.data)
-        mujoco.mj_camlight(model, agent.data)
-        try:
-            return shoot(self._camera, agent.data, settings, self._human_geoms)
-        finally:
-            model.cam_quat[self._cam_id] = self._base_quat
+_DIVERGENCE_WARNINGS = [
+    int(w)
+    for w in (
+        mujoco.mjtWarning.mjWARN_BADQPOS,
+        mujoco.mjtWarning.mjWARN_BADQVEL,
+        mujoco.mjtWarning.mjWARN_BADQACC,
+        mujoco.mjtWarning.mjWARN_CONTACTFULL,
+        mujoco.mjtWarning.mjWARN_CNSTRFULL,
+    )
+]
 
-    def close(self) -> None:
-        """Releases the camera."""
-        if self._camera is not None:
-            self._camera.close()
-            self._camera = None
+
+def _warning_counts(data: mujoco.MjData) -> tuple[int, ...]:
+    return tuple(int(data.warning[w].number) for w in _DIVERGENCE_WARNINGS)

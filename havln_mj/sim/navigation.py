@@ -11,21 +11,13 @@ horizontal angle in (−π, π], right positive; ``rel_elevation = atan2(Δz, ho
 
 This runs on every action, so each viewpoint's neighbours are turned into plain tuples of
 floats once, on first visit, and the per-step work is a few ``math`` calls per neighbour.
-
-A graph proxy walks some edges by a *route* through other viewpoints instead of straight
-(:attr:`~havln_mj.scene.scan.Scan.routes`); :meth:`NavTable.path` gives the polyline a body
-follows on such an edge, in either direction (None on an edge walked straight).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-
-import numpy as np
 
 from havln_mj.scene.navgraph import NavGraph
-from havln_mj.scene.proxy.routes import Route, route_camera_points
 from havln_mj.sim.state import ViewPoint
 
 _PI = math.pi
@@ -47,49 +39,11 @@ class NavTable:
         graph: The scan's navigation graph.
     """
 
-    def __init__(
-        self,
-        scan_id: str,
-        graph: NavGraph,
-        routes: Mapping[tuple[str, str], Route] | None = None,
-    ) -> None:
-        """Prepares the table.
-
-        Args:
-            scan_id: The scan's id.
-            graph: Its navigation graph.
-            routes: Edges walked by a route, ``(a, b) -> (a, ..., b)`` (either direction).
-        """
+    def __init__(self, scan_id: str, graph: NavGraph) -> None:
         self.scan_id = scan_id
         self.graph = graph
         self._here: dict[str, tuple[int, float, float, float]] = {}
         self._neighbours: dict[str, list[_Neighbour]] = {}
-        self._routes: dict[tuple[str, str], Route] = {}
-        for (a, b), via in (routes or {}).items():
-            self._routes[(a, b)] = tuple(via)
-            self._routes.setdefault((b, a), tuple(via)[::-1])
-        self._paths: dict[tuple[str, str], tuple[np.ndarray, float]] = {}
-
-    def path(self, a: str, b: str) -> tuple[np.ndarray, float] | None:
-        """The polyline a body walks from ``a`` to neighbour ``b``, if not the straight line.
-
-        Returns:
-            None when the edge is walked straight, else the camera positions ``(K, 3)`` along
-            its route (``a`` first, ``b`` last; see
-            :func:`~havln_mj.scene.proxy.routes.route_camera_points`) and the route's length
-            (3-D, metres).
-        """
-        if not self._routes:
-            return None
-        path = self._paths.get((a, b))
-        if path is None:
-            via = self._routes.get((a, b))
-            if via is None:
-                return None
-            points = route_camera_points(self.graph, via)
-            length = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
-            path = self._paths[(a, b)] = (points, length)
-        return path
 
     def location(self, vp: str) -> ViewPoint:
         """The agent's own location at ``vp`` (relative values 0).

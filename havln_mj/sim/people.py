@@ -40,6 +40,7 @@ class HumanCrowds:
         placements: HA3D placement file (default ``$HAVLN_HA3D_PLACEMENTS``).
         haps: HAPS ``human_motion_meshes`` folder (default ``$HAVLN_HAPS_DIR``).
         smpl_model: SMPL model file, npz or chumpy-free pkl (default ``$HAVLN_SMPL_MODEL``).
+        together: Chance that a person placed by HA3D's rule is joined by others.
     """
 
     def __init__(
@@ -48,8 +49,10 @@ class HumanCrowds:
         placements: Path | str | None = None,
         haps: Path | str | None = None,
         smpl_model: Path | str | None = None,
+        together: float = 0.0,
     ) -> None:
         self._load = load
+        self._together = together
         path = _given(placements, PLACEMENTS_ENV)
         self._placements = read_ha3d_placements(path) if path else {}
         smpl_path, haps_path = _given(smpl_model, SMPL_ENV), _given(haps, HAPS_ENV)
@@ -62,4 +65,4 @@ class HumanCrowds:
         entries = self._placements.get(scan_id)
         if entries is not None:
             return populate_ha3d(graph, entries, rng, sources=self._sources)
-        return populate(self._load(scan_id), rng, sources=self._sources)
+        return populate(self._load(scan_id), rng, sources=self._sources, together=self._together)

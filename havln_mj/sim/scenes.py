@@ -1,18 +1,14 @@
-"""Scan ids to navigation tables and rendered worlds, loaded on first use and cached.
+"""Scan ids to navigation tables and scans, loaded on first use and cached.
 
-With rendering off only navigation graphs are needed: a Matterport scan id reads
-``<scan>_connectivity.json`` from the navigation-graph folder and nothing else (no mesh, no
-proxy), so all 90 real graphs load in a second. A procedural id (``proc-<seed>``) or a scan
-folder goes through ``load_scan``. With rendering on, every scan is loaded with
-``load_scan`` (the user's mesh, else a graph proxy) and its world is built once; worlds are
-kept in a least-recently-used cache of ``cache_size`` scans. A loaded scan's navigation table
-carries the edges its body walks by a route (graph proxies); a real scan id with rendering
-off has no proxy, and every edge is walked straight, as in MatterSim.
+A Matterport scan id's graph is always read from ``<scan>_connectivity.json`` in the
+navigation-graph folder, in every mode, so navigable locations never depend on rendering; the
+scan itself (the user's mesh, else a graph proxy) is loaded only when something needs its
+geometry (rendering, a legged body). All 90 real graphs load in a second. A procedural id
+(``proc-<seed>``) or a scan folder goes through ``load_scan`` for its graph too.
 """
 
 from __future__ import annotations
 
-from collections import OrderedDict
 from pathlib import Path
 
 from havln_mj.errors import UnknownScanError, UnknownSceneError, did_you_mean
@@ -20,10 +16,7 @@ from havln_mj.scene.ids import parse_scene_id
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.realscan import CONNECTIVITY_HOW_TO, resolve_connectivity_dir
 from havln_mj.scene.scan import Scan, known_scene_ids, load_scan
-from havln_mj.sim.crowd import NO_CROWD, Crowd
 from havln_mj.sim.navigation import NavTable
-from havln_mj.sim.rendering import SceneView, ViewSettings
-from havln_mj.sim.world import WorldOptions
 
 
 class SceneLibrary:
@@ -33,28 +26,13 @@ class SceneLibrary:
         connectivity_dir: Folder of ``<scan>_connectivity.json`` (default
             ``$HAVLN_CONNECTIVITY_DIR``).
         mp3d_dir: Root of the user's Matterport3D data (default ``$HAVLN_MP3D_DIR``).
-        rendering: Whether worlds will be rendered (real scans then load through
-            ``load_scan``).
-        cache_size: How many built worlds to keep.
-        world_options: How worlds are built.
     """
 
-    def __init__(
-        self,
-        connectivity_dir: Path | str | None,
-        mp3d_dir: Path | str | None,
-        rendering: bool,
-        cache_size: int,
-        world_options: WorldOptions,
-    ) -> None:
+    def __init__(self, connectivity_dir: Path | str | None, mp3d_dir: Path | str | None) -> None:
         self._conn_dir = resolve_connectivity_dir(connectivity_dir)
         self._mp3d_dir = mp3d_dir
-        self._rendering = rendering
-        self._cache_size = max(1, cache_size)
-        self._world_options = world_options
         self._tables: dict[str, NavTable] = {}
         self._scans: dict[str, Scan] = {}
-        self._views: OrderedDict[str, SceneView] = OrderedDict()
 
     def connectivity_ids(self) -> list[str]:
         """Scan ids listed in the navigation-graph folder (``scans.txt``, else its files)."""
@@ -75,13 +53,7 @@ class SceneLibrary:
         """
         table = self._tables.get(scan_id)
         if table is None:
-            graph = self._graph(scan_id)
-            # A loaded scan's body walks some edges by a route (graph proxies); a bare graph
-            # (a real scan id with rendering off) is MatterSim's: every edge straight.
-            scan = self._scans.get(scan_id)
-            routes = scan.routes if scan is not None and scan.graph is graph else None
-            table = NavTable(scan_id, graph, routes)
-            self._tables[scan_id] = table
+            table = self._tables[scan_id] = NavTable(scan_id, self._graph(scan_id))
         return table
 
     def _graph(self, scan_id: str) -> NavGraph:
@@ -98,8 +70,7 @@ class SceneLibrary:
                     f"unknown scan {scan_id!r}: {where} (setNavGraphPath). "
                     f"Graphs: {CONNECTIVITY_HOW_TO}.{did_you_mean(scan_id, known)}"
                 )
-            if not self._rendering:
-                return NavGraph.from_file(path)
+            return NavGraph.from_file(path)
         return self.scan(scan_id).graph
 
     def scan(self, scan_id: str) -> Scan:
@@ -112,23 +83,3 @@ class SceneLibrary:
                 raise UnknownScanError(str(exc)) from None
             self._scans[scan_id] = scan
         return scan
-
-    def view(self, scan_id: str, settings: ViewSettings, crowd: Crowd = NO_CROWD) -> SceneView:
-        """The renderable world of ``scan_id`` with ``crowd``'s people, set to ``settings``."""
-        view = self._views.get(scan_id)
-        if view is None:
-            view = SceneView(self.scan(scan_id), self._world_options, crowd)
-            self._views[scan_id] = view
-            while len(self._views) > self._cache_size:
-                _, old = self._views.popitem(last=False)
-                old.close()
-        else:
-            self._views.move_to_end(scan_id)
-        view.configure(settings)
-        return view
-
-    def close(self) -> None:
-        """Releases every world's renderer."""
-        for view in self._views.values():
-            view.close()
-        self._views.clear()

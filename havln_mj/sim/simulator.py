@@ -2,14 +2,15 @@
 
 Agent code written for MatterSim runs with ``import havln_mj as MatterSim``: the same
 setters, batched list arguments, ``initialize``/``newEpisode``/``makeAction``/``getState``,
-navigable-location rules, discretised views and exception types (see
-``reference/mattersim_api.md`` for the rules). On top of MatterSim:
+navigable-location rules, discretised views and exception types (those of the
+Matterport3DSimulator's ``MatterSim.Simulator``). On top of MatterSim:
 
 * **People** (HA3D): with ``Simulator(humans=True)`` every scan is populated (see
   :mod:`havln_mj.sim.people`); people move with simulated time and are drawn in RGB, depth and
   an optional human mask. ``state.isCrushed`` is 1 when the agent came within the collision
-  distance of a person at any time during the last action, in every mode (HA3D computed it
-  only with rendering off); ``getHumanState()`` gives everyone's state.
+  distance of a person at any time during the last action (for the start state: at the
+  start), in every mode (HA3D computed it only with rendering off); ``getHumanState()``
+  gives everyone's state.
 * **Clock**: every action advances the element's simulated time (``state.time``) by its
   duration: the move at ``speed`` m/s, then the turn at ``turn_rate`` rad/s (the larger of
   the heading and elevation change); an action that neither moves nor turns is a wait of
@@ -19,13 +20,10 @@ navigable-location rules, discretised views and exception types (see
   sampled along it (with rendering off a real scan id has no proxy, and every edge is
   straight, as in MatterSim).
 * **Egocentric actions** (HA-VLN): ``makeEgoAction`` (see :mod:`havln_mj.sim.egocentric`).
-* **A legged robot**: ``Simulator(body="go1")`` executes every action with a physically
-  simulated Unitree GO1 (see :mod:`havln_mj.sim.legged`): graph actions become turn-then-walk
-  primitives, ``makeRobotAction`` takes the real robot's continuous actions (forward 0.5 m,
-  turn ±45°, stop), states report the snapped viewpoint with the true pose in ``state.pose``,
-  the clock advances by physics time, and a fall ends the episode (``state.fell``).
 * **Images**: BGR ``uint8`` and ``uint16`` depth in 0.25 mm units, as MatterSim; RGB and
-  ``float32`` metres on request (``set_color_order``, ``set_depth_units``).
+  ``float32`` metres on request (``set_color_order``, ``set_depth_units``). Every image comes
+  from the frame pipeline (:mod:`havln_mj.sim.frame`); :meth:`Simulator.set_film` also draws
+  frames during actions (videos).
 
 Differences from MatterSim, on purpose: setters called after ``initialize`` are ignored as
 MatterSim does, but with a warning; a list argument of the wrong length raises even when too
@@ -40,148 +38,46 @@ from __future__ import annotations
 import math
 import numbers
 import time
-import warnings
 import zlib
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 
+import mujoco
 import numpy as np
 
 from havln_mj.errors import (
-    BatchSizeError,
-    InvalidActionError,
     InvalidArgumentError,
     NotInitializedError,
 )
-from havln_mj.frames import TWO_PI, wrap_angle
+from havln_mj.frames import TWO_PI
 from havln_mj.robot.point_body import DEFAULT_SPEED, DEFAULT_TURN_RATE
 from havln_mj.scene.navgraph import NavGraph
-from havln_mj.sim.crowd import (
-    COLLISION_DISTANCE,
-    NO_CROWD,
-    NO_PROXIMITY,
-    Crowd,
-    Proximity,
-    proximity,
+from havln_mj.scene.scan import Scan
+from havln_mj.sim.actions import (
+    check_delta,
+    check_index,
+    check_robot_action,
+    parse_mixed,
+    per_element,
 )
+from havln_mj.sim.batch import WAIT_S, Batch, Element, FilmCallback
+from havln_mj.sim.body import BODY_KINDS, ROBOT_ACTIONS, BodyKind, make_kind
+from havln_mj.sim.crowd import COLLISION_DISTANCE, NO_CROWD, Crowd
 from havln_mj.sim.egocentric import DEFAULT_TURN, EgoAction, ego_to_mattersim, parse_ego_action
-from havln_mj.sim.legged import LeggedAgent, LeggedOptions, LeggedView, LeggedWorld, Outcome
+from havln_mj.sim.images import ImageFormat
 from havln_mj.sim.navigation import NavTable
-from havln_mj.sim.rendering import ViewSettings, depth_to_mattersim
 from havln_mj.sim.scenes import SceneLibrary
-from havln_mj.sim.state import SimState, ViewPoint
-from havln_mj.sim.viewing import (
-    DEFAULT_ELEVATION_LIMITS,
-    ELEVATION_INCREMENT,
-    HEADING_INCREMENT,
-    continuous_view,
-    discrete_delta,
-    discrete_view,
-    valid_elevation_limits,
-)
-from havln_mj.sim.world import WorldOptions
+from havln_mj.sim.settings import SimulatorSettings, _check_angle
+from havln_mj.sim.state import SimState
 
-WAIT_S = 1.0  # seconds a "stay" action without rotation lasts
-COLOR_ORDERS = ("BGR", "RGB")
-BODIES = ("point", "go1")
-ROBOT_ACTIONS = ("stop", "forward", "turn_left", "turn_right")
-DEPTH_UNITS = ("mattersim", "metres")
+__all__ = ["BODIES", "ROBOT_ACTIONS", "WAIT_S", "Simulator"]
+
+BODIES = BODY_KINDS
 
 CrowdFactory = Callable[[str, NavGraph, np.random.Generator], Crowd]
-# The public setter of each locked setting, for the warning when it is called too late.
-_SETTERS = {
-    "dataset_path": "setDatasetPath",
-    "nav_graph_path": "setNavGraphPath",
-    "rendering": "setRenderingEnabled",
-    "discretized": "setDiscretizedViewingAngles",
-    "restricted": "setRestrictedNavigation",
-    "preloading": "setPreloadingEnabled",
-    "depth": "setDepthEnabled",
-    "batch_size": "setBatchSize",
-    "cache_size": "setCacheSize",
-    "seed": "setSeed",
-    "color_order": "set_color_order",
-    "depth_units": "set_depth_units",
-    "human_mask": "set_human_mask_enabled",
-    "world_options": "set_world_options",
-}
 
 
-@dataclass
-class _Settings:
-    """MatterSim's settings with its defaults (paths default to the environment variables)."""
-
-    dataset_path: str | None = None
-    nav_graph_path: str | None = None
-    rendering: bool = True
-    width: int = 320
-    height: int = 240
-    vfov: float = 0.8
-    elevation_limits: tuple[float, float] = DEFAULT_ELEVATION_LIMITS
-    discretized: bool = False
-    restricted: bool = True
-    preloading: bool = False
-    depth: bool = False
-    batch_size: int = 1
-    cache_size: int = 200
-    seed: int = 1
-    color_order: str = "BGR"
-    depth_units: str = "mattersim"
-    human_mask: bool = False
-    world_options: WorldOptions = field(default_factory=lambda: WorldOptions(collision="none"))
-
-
-class _Agent:
-    """One batch element's mutable episode state."""
-
-    __slots__ = (
-        "contacts",
-        "crowd",
-        "elevation",
-        "heading",
-        "legged",
-        "navigable",
-        "state",
-        "step",
-        "table",
-        "time",
-        "view_index",
-    )
-
-    def __init__(self, table: NavTable, crowd: Crowd) -> None:
-        self.table = table
-        self.crowd = crowd
-        self.heading = 0.0
-        self.elevation = 0.0
-        self.view_index = 0
-        self.step = 0
-        self.time = 0.0
-        self.navigable: list[ViewPoint] = []
-        self.state: SimState | None = None
-        self.legged: LeggedAgent | None = None
-        self.contacts = 0
-
-
-def _check_bool(name: str, value: object) -> bool:
-    if not isinstance(value, bool | np.bool_):
-        raise InvalidArgumentError(f"{name} takes a bool, got {value!r}")
-    return bool(value)
-
-
-def _check_int(name: str, value: object, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < low:
-        raise InvalidArgumentError(f"{name} takes an integer ≥ {low}, got {value!r}")
-    return int(value)
-
-
-def _check_angle(what: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise InvalidArgumentError(f"{what} must be a finite number of radians, got {value!r}")
-    return float(value)
-
-
-class Simulator:
+class Simulator(SimulatorSettings):
     """A batch of agents navigating scans, MatterSim-style.
 
     Example:
@@ -206,7 +102,9 @@ class Simulator:
         turn_rate: float = DEFAULT_TURN_RATE,
         collision_distance: float = COLLISION_DISTANCE,
         body: str = "point",
-        legged: LeggedOptions | None = None,
+        legged: object | None = None,
+        together: float = 0.0,
+        reactions: bool | object = False,
     ) -> None:
         """Creates an uninitialised simulator with MatterSim's default settings.
 
@@ -217,12 +115,20 @@ class Simulator:
                 ``$HAVLN_HA3D_PLACEMENTS``); used when ``humans`` is True, as are:
             human_motions: HAPS motion folder (default ``$HAVLN_HAPS_DIR``).
             smpl_model: SMPL model file for skinned people (default ``$HAVLN_SMPL_MODEL``).
-            speed: Agent speed for the clock (m/s).
-            turn_rate: Agent turning rate for the clock (rad/s).
+            speed: Point-body speed for the clock (m/s).
+            turn_rate: Point-body turning rate for the clock (rad/s).
             collision_distance: HA-VLN's collision threshold (metres, horizontal).
             body: ``"point"`` (kinematic camera rig) or ``"go1"`` (the simulated quadruped).
-            legged: How the GO1 is set up and driven (default :class:`LeggedOptions`).
+            legged: How the GO1 is set up and driven
+                (:class:`~havln_mj.sim.legged.LeggedOptions`; default its defaults).
+            together: With ``humans=True``: the chance that a placed person is joined by
+                others (conversations, a handover, walking side by side); 0 keeps HA3D's
+                one person per spot.
+            reactions: Whether people notice the agent (walkers yield, others glance), or
+                a :class:`~havln_mj.humans.reactions.Reactions` saying how; each batch
+                element's people react to that element alone.
         """
+        super().__init__()
         for name, value in (
             ("speed", speed),
             ("turn_rate", turn_rate),
@@ -234,148 +140,52 @@ class Simulator:
             raise InvalidArgumentError(f"humans must be a bool or a crowd factory, got {humans!r}")
         if body not in BODIES:
             raise InvalidArgumentError(f"body {body!r} unknown; valid: {', '.join(BODIES)}")
+        if not (isinstance(together, numbers.Real) and 0.0 <= together <= 1.0):
+            raise InvalidArgumentError(f"together must be a chance in [0, 1], got {together!r}")
+        self._together = float(together)
+        self._reactions = _reactions(reactions)
         self._humans = humans
-        self._body = body
-        self._legged_options = legged or LeggedOptions()
-        self._legged_worlds: dict[str, tuple[LeggedWorld, LeggedView]] = {}
+        self._body_name = body
+        self._legged_options = legged
         self._human_files = (human_placements, human_motions, smpl_model)
         self._crowds: CrowdFactory | None = None
         self._speed = float(speed)
         self._turn_rate = float(turn_rate)
         self._collision_distance = float(collision_distance)
-        self._cfg = _Settings()
-        self._initialized = False
         self._library: SceneLibrary | None = None
+        self._kind: BodyKind | None = None
+        self._batch: Batch | None = None
         self._rng = np.random.default_rng(self._cfg.seed)
-        self._agents: list[_Agent] = []
         self._crowd_of: dict[str, Crowd] = {}
-        self._blank: tuple[np.ndarray, np.ndarray] | None = None
+        self._film: tuple[float, FilmCallback, tuple[str, ...]] | None = None
         self._timers = {"process": 0.0, "render": 0.0, "frames": 0}
-
-    # ------------------------------------------------------------------ settings
-
-    def _set(self, name: str, value: object, *, locked: bool = True) -> None:
-        if locked and self._initialized:
-            warnings.warn(
-                f"{_SETTERS[name]}() is ignored after initialize(), as in MatterSim; "
-                "call it before",
-                stacklevel=3,
-            )
-            return
-        setattr(self._cfg, name, value)
-
-    def setDatasetPath(self, path: str | Path) -> None:  # noqa: N802 - MatterSim's names
-        """Root of the user's Matterport3D data (raw or habitat layout), for real meshes."""
-        self._set("dataset_path", str(path))
-
-    def setNavGraphPath(self, path: str | Path) -> None:  # noqa: N802
-        """Folder of ``<scan>_connectivity.json`` navigation graphs."""
-        self._set("nav_graph_path", str(path))
-
-    def setRenderingEnabled(self, value: bool) -> None:  # noqa: N802
-        """Whether RGB (and depth) are rendered; off skips all GL work."""
-        self._set("rendering", _check_bool("setRenderingEnabled", value))
-
-    def setCameraResolution(self, width: int, height: int) -> None:  # noqa: N802
-        """Image size in pixels (may change after ``initialize``)."""
-        w = _check_int("setCameraResolution width", width, 1)
-        h = _check_int("setCameraResolution height", height, 1)
-        self._set("width", w, locked=False)
-        self._set("height", h, locked=False)
-        self._blank = None
-
-    def setCameraVFOV(self, vfov: float) -> None:  # noqa: N802
-        """Vertical field of view in radians, in (0, π) (may change after ``initialize``)."""
-        v = _check_angle("setCameraVFOV", vfov)
-        if not 0.0 < v < math.pi:
-            raise InvalidArgumentError(f"setCameraVFOV takes radians in (0, π), got {vfov!r}")
-        self._set("vfov", v, locked=False)
-
-    def setElevationLimits(self, min: float, max: float) -> bool:  # noqa: N802
-        """Continuous-mode elevation limits (may change after ``initialize``).
-
-        Returns False, changing nothing, unless min ∈ (−π/2, 0) and max ∈ (0, π/2).
-        """
-        lo, hi = _check_angle("min elevation", min), _check_angle("max elevation", max)
-        if not valid_elevation_limits(lo, hi):
-            return False
-        self._set("elevation_limits", (lo, hi), locked=False)
-        return True
-
-    def setDiscretizedViewingAngles(self, value: bool) -> None:  # noqa: N802
-        """12 headings × 3 elevations, 30° apart, and ``viewIndex``."""
-        self._set("discretized", _check_bool("setDiscretizedViewingAngles", value))
-
-    def setRestrictedNavigation(self, value: bool) -> None:  # noqa: N802
-        """Whether only neighbours within the horizontal field of view are navigable."""
-        self._set("restricted", _check_bool("setRestrictedNavigation", value))
-
-    def setPreloadingEnabled(self, value: bool) -> None:  # noqa: N802
-        """Whether ``initialize`` loads every graph of the navigation-graph folder.
-
-        With rendering on it also builds their worlds, up to the cache size.
-        """
-        self._set("preloading", _check_bool("setPreloadingEnabled", value))
-
-    def setDepthEnabled(self, value: bool) -> None:  # noqa: N802
-        """Whether depth is rendered."""
-        self._set("depth", _check_bool("setDepthEnabled", value))
-
-    def setBatchSize(self, size: int) -> None:  # noqa: N802
-        """Number of agents stepped together."""
-        self._set("batch_size", _check_int("setBatchSize", size, 1))
-
-    def setCacheSize(self, size: int) -> None:  # noqa: N802
-        """Number of built scan worlds kept for rendering."""
-        self._set("cache_size", _check_int("setCacheSize", size, 1))
-
-    def setSeed(self, seed: int) -> None:  # noqa: N802
-        """Seed of the simulator's random generator (random episodes, crowds)."""
-        self._set("seed", _check_int("setSeed", seed, 0))
-
-    def set_color_order(self, order: str) -> None:
-        """``"BGR"`` (MatterSim, the default) or ``"RGB"``."""
-        if order not in COLOR_ORDERS:
-            raise InvalidArgumentError(f"color order {order!r}; valid: {COLOR_ORDERS}")
-        self._set("color_order", order)
-
-    def set_depth_units(self, units: str) -> None:
-        """Depth format: ``"mattersim"`` (the default) or ``"metres"``.
-
-        MatterSim's is ``uint16`` H×W×1 in 0.25 mm units; metres are ``float32`` H×W×1.
-        """
-        if units not in DEPTH_UNITS:
-            raise InvalidArgumentError(f"depth units {units!r}; valid: {DEPTH_UNITS}")
-        self._set("depth_units", units)
-
-    def set_human_mask_enabled(self, value: bool) -> None:
-        """Whether states carry ``humanMask`` (a second, segmentation pass per frame)."""
-        self._set("human_mask", _check_bool("set_human_mask_enabled", value))
-
-    def set_world_options(self, options: WorldOptions) -> None:
-        """How rendered worlds are built.
-
-        The default builds no collision geometry, which the point body does not need.
-        """
-        if not isinstance(options, WorldOptions):
-            raise InvalidArgumentError(f"expected WorldOptions, got {options!r}")
-        self._set("world_options", options)
 
     # ------------------------------------------------------------------ lifecycle
 
     def initialize(self) -> None:
-        """Fixes the settings and prepares the scene library (and preloads if asked)."""
+        """Fixes the settings and prepares the scenes and bodies (and preloads if asked)."""
         cfg = self._cfg
-        self._library = SceneLibrary(
-            cfg.nav_graph_path, cfg.dataset_path, cfg.rendering, cfg.cache_size, cfg.world_options
+        self._library = SceneLibrary(cfg.nav_graph_path, cfg.dataset_path)
+        self._kind = make_kind(
+            self._body_name,
+            self._library.scan,
+            cfg,
+            self._speed,
+            self._turn_rate,
+            self._legged_options,
         )
+        image_format = ImageFormat(cfg.color_order, cfg.depth_units)
+        self._batch = Batch(cfg, self._kind, image_format, self._collision_distance, self._timers)
+        self._batch.film = self._film
+        self._batch.reactions = self._reactions
         self._rng = np.random.default_rng(cfg.seed)
-        self._agents = []
         self._crowd_of = {}
         if self._humans is True:
             from havln_mj.sim.people import HumanCrowds  # the humans package, only when used
 
-            self._crowds = HumanCrowds(self._library.scan, *self._human_files)
+            self._crowds = HumanCrowds(
+                self._library.scan, *self._human_files, together=self._together
+            )
         else:
             self._crowds = self._humans or None
         self._initialized = True
@@ -384,17 +194,15 @@ class Simulator:
             for k, scan_id in enumerate(self._library.connectivity_ids()):
                 table = self._library.table(scan_id)
                 if cfg.rendering and k < cfg.cache_size:
-                    self._library.view(scan_id, self._view_settings(), self._crowd(table))
+                    self._kind.prepare(scan_id, self._crowd(table), True)
 
     def close(self) -> None:
         """Releases renderers; the simulator can be initialised again."""
-        if self._library is not None:
-            self._library.close()
-        for _, view in self._legged_worlds.values():
-            view.close()
-        self._legged_worlds = {}
+        if self._kind is not None:
+            self._kind.close()
+        self._kind = None
         self._library = None
-        self._agents = []
+        self._batch = None
         self._initialized = False
 
     def __enter__(self) -> Simulator:
@@ -403,20 +211,38 @@ class Simulator:
     def __exit__(self, *exc_info: object) -> None:
         self.close()
 
+    def set_film(
+        self, fps: float | None, callback: FilmCallback | None = None, cameras: Sequence[str] = ()
+    ) -> None:
+        """Draws frames during actions, at ``fps`` per simulated second (None stops).
+
+        ``callback(element, t, views, pose)`` receives the element's index, the simulated
+        time, the views of its body camera then of each of ``cameras`` (other cameras of the
+        body's world, e.g. the GO1's chase camera ``"go1/chase"``), with the people and the
+        body as they were at ``t``, and the body's pose ``(x, y, z, heading)`` then. The
+        first frame of an episode is its start state.
+
+        Raises:
+            InvalidArgumentError: ``fps`` is not positive, or no callback is given.
+        """
+        if fps is None:
+            self._film = None
+            if self._batch is not None:
+                self._batch.film = None
+            return
+        ok = isinstance(fps, numbers.Real) and math.isfinite(fps) and 0 < fps <= 1000
+        if not ok or callback is None:
+            raise InvalidArgumentError(
+                f"set_film takes fps in (0, 1000] and a callback, got {fps!r}"
+            )
+        self._film = (float(fps), callback, tuple(cameras))
+        if self._batch is not None:
+            self._batch.film = self._film
+
     # ------------------------------------------------------------------ episodes
 
-    def _batch(self, name: str, values: object) -> list:
-        n = self._cfg.batch_size
-        if isinstance(values, str) or not isinstance(values, Sequence | np.ndarray):
-            raise BatchSizeError(
-                f"{name} takes a list with one entry per batch element (batch size {n}), "
-                f"got {values!r}"
-            )
-        if len(values) != n:
-            raise BatchSizeError(
-                f"{name} has {len(values)} entries but the batch size is {n} (setBatchSize)"
-            )
-        return list(values)
+    def _per_element(self, name: str, values: object) -> list:
+        return per_element(name, values, self._cfg.batch_size)
 
     def _crowd(self, table: NavTable) -> Crowd:
         crowd = self._crowd_of.get(table.scan_id)
@@ -447,10 +273,10 @@ class Simulator:
         t0 = time.perf_counter()
         if not self._initialized:
             self.initialize()
-        scans = self._batch("scanId", scanId)
-        vps = self._batch("viewpointId", viewpointId)
-        headings = self._batch("heading", heading)
-        elevations = self._batch("elevation", elevation)
+        scans = self._per_element("scanId", scanId)
+        vps = self._per_element("viewpointId", viewpointId)
+        headings = self._per_element("heading", heading)
+        elevations = self._per_element("elevation", elevation)
         starts = []
         for i, (scan, vp, h, e) in enumerate(zip(scans, vps, headings, elevations, strict=True)):
             table = self._library.table(scan)
@@ -459,8 +285,8 @@ class Simulator:
             table.location(vp)  # raises for an unknown or excluded viewpoint
             h = _check_angle(f"heading[{i}]", h)
             e = _check_angle(f"elevation[{i}]", e)
-            starts.append((table, vp, h, e))
-        self._start(starts)
+            starts.append((table, self._crowd(table), vp, h, e))
+        self._batch.start(starts)
         self._timers["process"] += time.perf_counter() - t0
 
     def newRandomEpisode(self, scanId: Sequence[str]) -> None:  # noqa: N802, N803
@@ -469,10 +295,11 @@ class Simulator:
         if not self._initialized:
             self.initialize()
         starts = []
-        for scan in self._batch("scanId", scanId):
+        for scan in self._per_element("scanId", scanId):
             table = self._library.table(scan)
-            starts.append((table, self._random_viewpoint(table), self._rng.uniform(0, TWO_PI), 0.0))
-        self._start(starts)
+            vp, heading = self._random_viewpoint(table), self._rng.uniform(0, TWO_PI)
+            starts.append((table, self._crowd(table), vp, heading, 0.0))
+        self._batch.start(starts)
         self._timers["process"] += time.perf_counter() - t0
 
     def _random_viewpoint(self, table: NavTable) -> str:
@@ -480,52 +307,6 @@ class Simulator:
         if not nodes:
             raise InvalidArgumentError(f"scan {table.scan_id} has no included viewpoints")
         return nodes[int(self._rng.integers(len(nodes)))]
-
-    def _start(self, starts: list[tuple[NavTable, str, float, float]]) -> None:
-        agents = []
-        for table, vp, h, e in starts:
-            a = _Agent(table, self._crowd(table))
-            a.heading, a.elevation, a.view_index = self._view(h, e)
-            if self._body == "go1":
-                a.legged = LeggedAgent(self._legged_world(table.scan_id, a.crowd)[0])
-                a.legged.place(table.graph.position(vp), table.graph.floor_z(vp), a.heading, 0.0)
-                a.heading, a.elevation, a.view_index = self._view(a.legged.heading(), e)
-            a.navigable = table.candidates(vp, a.heading, a.elevation, self._cos_half_hfov())
-            agents.append(a)
-        self._agents = agents
-        self._publish(range(len(agents)), [NO_PROXIMITY] * len(agents))
-
-    def _legged_world(self, scan_id: str, crowd: Crowd) -> tuple[LeggedWorld, LeggedView]:
-        """The GO1 world of a scan (built once per scan)."""
-        entry = self._legged_worlds.get(scan_id)
-        if entry is None:
-            world = LeggedWorld(
-                self._library.scan(scan_id), self._cfg.world_options, crowd, self._legged_options
-            )
-            entry = self._legged_worlds[scan_id] = (world, LeggedView(world))
-        return entry
-
-    def _view(self, heading: float, elevation: float) -> tuple[float, float, int]:
-        if self._cfg.discretized:
-            return discrete_view(heading, elevation)
-        return continuous_view(heading, elevation, self._cfg.elevation_limits)
-
-    def _half_hfov(self) -> float:
-        cfg = self._cfg
-        return cfg.vfov * cfg.width / cfg.height / 2.0
-
-    @property
-    def batch_size(self) -> int:
-        """The number of batch elements (``setBatchSize``)."""
-        return self._cfg.batch_size
-
-    @property
-    def half_hfov(self) -> float:
-        """Half the horizontal field of view (radians), as MatterSim approximates it.
-
-        ``vfov · width / height / 2``; restricted navigation and FORWARD use it.
-        """
-        return self._half_hfov()
 
     def graph(self, scan_id: str) -> NavGraph:
         """The navigation graph the simulator uses for ``scan_id`` (loaded on first use).
@@ -537,8 +318,58 @@ class Simulator:
             self.initialize()
         return self._library.table(scan_id).graph
 
-    def _cos_half_hfov(self) -> float | None:
-        return math.cos(self._half_hfov()) if self._cfg.restricted else None
+    @property
+    def robot_actions(self) -> tuple[str, ...]:
+        """The robot actions the body takes besides ``"stop"`` (none for the point body)."""
+        if not self._initialized:
+            self.initialize()
+        return self._kind.robot_actions
+
+    def scan(self, scan_id: str) -> Scan:
+        """The scan the simulator uses for ``scan_id`` with its geometry (loaded on first use).
+
+        Raises:
+            UnknownScanError: No scan or graph can be found for ``scan_id``.
+        """
+        if not self._initialized:
+            self.initialize()
+        return self._library.scan(scan_id)
+
+    def people(self, element: int = 0) -> Crowd:
+        """The people element ``element`` shares its episode with (reacting to it, if set).
+
+        Raises:
+            NotInitializedError: No episode has been started.
+        """
+        self._started("people")
+        return self._batch.elements[element].crowd
+
+    def crowd(self, scan_id: str) -> Crowd:
+        """The people of ``scan_id`` (made on first use from the seed and the scan)."""
+        if not self._initialized:
+            self.initialize()
+        return self._crowd(self._library.table(scan_id))
+
+    def draw(self, element: int = 0) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        """Element ``element``'s world posed at its time: the people, the body, its camera.
+
+        The model and data a live viewer shows (kinematics done); it shares them with the
+        simulator, so re-draw after every action.
+
+        Raises:
+            NotInitializedError: No episode has been started.
+            InvalidArgumentError: ``element`` is not a batch index.
+        """
+        self._started("draw")
+        n = len(self._batch.elements)
+        if (
+            isinstance(element, bool)
+            or not isinstance(element, numbers.Integral)
+            or not 0 <= element < n
+        ):
+            raise InvalidArgumentError(f"element {element!r} out of range; valid 0–{n - 1}")
+        el = self._batch.elements[element]
+        return el.body.scene(el.elevation, el.time)
 
     # ------------------------------------------------------------------ actions
 
@@ -554,15 +385,15 @@ class Simulator:
                 ``ValueError``).
         """
         t0 = time.perf_counter()
-        agents = self._running()
-        indices = self._batch("index", index)
-        dhs = self._batch("heading", heading)
-        des = self._batch("elevation", elevation)
+        elements = self._running()
+        indices = self._per_element("index", index)
+        dhs = self._per_element("heading", heading)
+        des = self._per_element("elevation", elevation)
         actions = [
-            (i, self._check_index(i, a, k), self._delta(i, dh), self._delta(i, de))
-            for i, (a, k, dh, de) in enumerate(zip(agents, indices, dhs, des, strict=True))
+            (i, check_index(i, el.navigable, k), check_delta(i, dh), check_delta(i, de))
+            for i, (el, k, dh, de) in enumerate(zip(elements, indices, dhs, des, strict=True))
         ]
-        self._apply(actions)
+        self._batch.apply(actions)
         self._timers["process"] += time.perf_counter() - t0
 
     def makeEgoAction(self, action: Sequence[EgoAction | int | str]) -> None:  # noqa: N802
@@ -571,14 +402,15 @@ class Simulator:
         Elements given ``STOP`` are left as they are (no step, no time).
         """
         t0 = time.perf_counter()
-        agents = self._running()
-        half = self._half_hfov()
+        elements = self._running()
+        half = self._cfg.half_hfov()
+        acts = [parse_ego_action(act) for act in self._per_element("action", action)]
         actions = []
-        for i, (a, act) in enumerate(zip(agents, self._batch("action", action), strict=True)):
-            args = ego_to_mattersim(parse_ego_action(act), a.state, half, DEFAULT_TURN)
+        for i, (el, act) in enumerate(zip(elements, acts, strict=True)):
+            args = ego_to_mattersim(act, el.state, half, DEFAULT_TURN)
             if args is not None:
                 actions.append((i, *args))
-        self._apply(actions)
+        self._batch.apply(actions)
         self._timers["process"] += time.perf_counter() - t0
 
     def wait(self, seconds: Sequence[float]) -> None:
@@ -596,256 +428,89 @@ class Simulator:
         t0 = time.perf_counter()
         self._running()
         durations = []
-        for i, s in enumerate(self._batch("seconds", seconds)):
+        for i, s in enumerate(self._per_element("seconds", seconds)):
             ok = isinstance(s, numbers.Real) and not isinstance(s, bool) and math.isfinite(s)
             if not ok or s < 0:
                 raise InvalidArgumentError(
                     f"wait for batch element {i} must be a finite number of seconds ≥ 0, got {s!r}"
                 )
             durations.append(float(s))
-        self._apply([(i, 0, 0.0, 0.0) for i in range(len(durations))], durations)
+        self._batch.apply([(i, 0, 0.0, 0.0) for i in range(len(durations))], durations)
         self._timers["process"] += time.perf_counter() - t0
-
-    def _running(self) -> list[_Agent]:
-        if not self._initialized:
-            raise NotInitializedError("makeAction called before initialize()")
-        if not self._agents:
-            raise NotInitializedError("makeAction called before newEpisode()")
-        return self._agents
-
-    @staticmethod
-    def _check_index(i: int, a: _Agent, k: object) -> int:
-        n = len(a.navigable)
-        if isinstance(k, bool) or not isinstance(k, numbers.Integral) or not 0 <= k < n:
-            raise InvalidActionError(
-                f"action index {k!r} for batch element {i} is out of range: "
-                f"{n} navigable locations, valid 0–{n - 1}"
-            )
-        return int(k)
-
-    @staticmethod
-    def _delta(i: int, value: object) -> float:
-        if isinstance(value, float) and math.isfinite(value):
-            return value  # the common case, checked cheaply
-        try:
-            return _check_angle(f"turn for batch element {i}", value)
-        except InvalidArgumentError as exc:
-            raise InvalidActionError(str(exc)) from None
-
-    def _apply(
-        self, actions: list[tuple[int, int, float, float]], waits: Sequence[float] | None = None
-    ) -> None:
-        """Move, then rotate, then recompute candidates, for each (element, index, dh, de).
-
-        ``waits`` (one per action, for index 0 without turns) overrides :data:`WAIT_S`.
-        """
-        cfg = self._cfg
-        cos_half = self._cos_half_hfov()
-        changed, near = [], []
-        for n, (i, k, dh, de) in enumerate(actions):
-            wait_s = WAIT_S if waits is None else waits[n]
-            a = self._agents[i]
-            here, target = a.navigable[0], a.navigable[k]
-            if cfg.discretized:
-                dh = discrete_delta(dh, HEADING_INCREMENT)
-                de = discrete_delta(de, ELEVATION_INCREMENT)
-                heading, elevation, view = discrete_view(a.heading + dh, a.elevation + de)
-            else:
-                heading, elevation, view = continuous_view(
-                    a.heading + dh, a.elevation + de, cfg.elevation_limits
-                )
-            if a.legged is not None:
-                outcome = self._legged_move(a, k, target, heading, wait_s)
-                heading, elevation, view = self._view(a.legged.heading(), elevation)
-                duration = outcome.duration
-                contact = outcome.contact or NO_PROXIMITY
-                a.contacts = outcome.human_contacts
-            else:
-                # An edge a graph proxy walks by a route takes the route, not the line.
-                route = a.table.path(here.viewpointId, target.viewpointId) if k else None
-                length = target.rel_distance if route is None else route[1]
-                move_s = length / self._speed
-                turn = max(abs(wrap_angle(heading - a.heading)), abs(elevation - a.elevation))
-                duration = move_s + turn / self._turn_rate
-                if duration == 0.0:
-                    duration = wait_s
-                contact = NO_PROXIMITY
-                if len(a.crowd):
-                    if route is None:
-                        path = ((here.x, here.y, here.z), (target.x, target.y, target.z))
-                    else:
-                        path = route[0]
-                    contact = proximity(
-                        a.crowd, path, a.time, move_s, duration, self._collision_distance
-                    )
-            a.time += duration
-            a.step += 1
-            a.heading, a.elevation, a.view_index = heading, elevation, view
-            a.navigable = a.table.candidates(target.viewpointId, heading, elevation, cos_half)
-            changed.append(i)
-            near.append(contact)
-        self._publish(changed, near)
-
-    def _legged_move(
-        self, a: _Agent, k: int, target: ViewPoint, heading: float, wait_s: float
-    ) -> Outcome:
-        """A graph action with the GO1: walk to the target viewpoint, then face ``heading``."""
-        legged = a.legged
-        if k == 0:
-            turn = wrap_angle(heading - legged.heading())
-            if abs(turn) < 1e-9:
-                return legged.run([("stand", wait_s)], a.time)
-            return legged.run([("turn", turn)], a.time)
-        floor = a.table.graph.floor_z(target.viewpointId)
-        return legged.go_to(np.array([target.x, target.y, floor]), heading, a.time)
 
     def makeRobotAction(self, action: Sequence[str]) -> None:  # noqa: N802
-        """The real robot's continuous actions, one per element (``body="go1"`` only).
+        """A robot's continuous actions, one per element (:data:`ROBOT_ACTIONS`).
 
-        ``"forward"`` walks :attr:`LeggedOptions.forward_m`, ``"turn_left"``/``"turn_right"``
-        turn by :attr:`LeggedOptions.turn_rad`, ``"stop"`` leaves the element alone. The
-        state's location becomes the included viewpoint nearest the robot on its floor.
+        With the GO1, ``"forward"`` walks :attr:`~havln_mj.sim.legged.LeggedOptions.forward_m`,
+        ``"turn_left"``/``"turn_right"`` turn by ``turn_rad``, ``"stop"`` leaves the element
+        alone. The state's location becomes the included viewpoint nearest the robot on its
+        floor.
 
         Raises:
-            InvalidActionError: An unknown action, or the simulator is not driving a GO1.
+            InvalidActionError: An unknown action, or a body without robot actions.
         """
         t0 = time.perf_counter()
-        agents = self._running()
-        if self._body != "go1":
-            raise InvalidActionError(
-                f'makeRobotAction needs Simulator(body="go1"); this one drives a {self._body} body'
-            )
-        opts = self._legged_options
-        plans = {
-            "forward": [("forward", opts.forward_m)],
-            "turn_left": [("turn", -opts.turn_rad)],
-            "turn_right": [("turn", opts.turn_rad)],
-        }
-        acts = self._batch("action", action)
-        for act in acts:
-            if act not in ROBOT_ACTIONS:
-                raise InvalidActionError(
-                    f"robot action {act!r} unknown; valid: {', '.join(ROBOT_ACTIONS)}"
-                )
-        changed, near = [], []
-        cos_half = self._cos_half_hfov()
-        for i, (a, act) in enumerate(zip(agents, acts, strict=True)):
-            if act == "stop":
-                continue
-            outcome = a.legged.run(plans[act], a.time)
-            a.time += outcome.duration
-            a.step += 1
-            a.contacts = outcome.human_contacts
-            a.heading, a.elevation, a.view_index = self._view(a.legged.heading(), a.elevation)
-            vp = self._nearest_viewpoint(a)
-            a.navigable = a.table.candidates(vp, a.heading, a.elevation, cos_half)
-            changed.append(i)
-            near.append(outcome.contact or NO_PROXIMITY)
-        self._publish(changed, near)
+        self._running()
+        acts = [
+            check_robot_action(act, self._kind.robot_actions)
+            for act in self._per_element("action", action)
+        ]
+        self._batch.robot(acts)
         self._timers["process"] += time.perf_counter() - t0
+
+    def step(self, actions: Sequence[object]) -> None:
+        """One action per element, of any kind; None leaves the element alone.
+
+        An extension of MatterSim for task code that steps elements independently: a graph
+        action is a tuple ``(index, dHeading, dElevation)`` (as ``makeAction``), an
+        :class:`~havln_mj.sim.egocentric.EgoAction` member an egocentric action (STOP leaves
+        the element alone), a string a robot action of :data:`ROBOT_ACTIONS` (``"stop"``
+        leaves it alone). The whole batch is checked before anything moves.
+
+        Raises:
+            NotInitializedError: No episode has been started.
+            BatchSizeError: ``actions`` does not have one entry per batch element.
+            InvalidActionError: An action of no kind, or invalid for its element.
+        """
+        t0 = time.perf_counter()
+        elements = self._running()
+        graph, robot = parse_mixed(
+            elements,
+            self._per_element("actions", actions),
+            self._cfg.half_hfov(),
+            self._kind.robot_actions,
+        )
+        if graph:
+            self._batch.apply(graph)
+        if any(r != "stop" for r in robot):
+            self._batch.robot(robot)
+        self._timers["process"] += time.perf_counter() - t0
+
+    def _running(self) -> list[Element]:
+        if not self._initialized:
+            raise NotInitializedError("makeAction called before initialize()")
+        if not self._batch.elements:
+            raise NotInitializedError("makeAction called before newEpisode()")
+        return self._batch.elements
 
     def getGeodesicDistance(self, viewpointId: Sequence[str]) -> list[float]:  # noqa: N802, N803
         """Each element's walking distance to a viewpoint (metres, ``inf`` if unreachable).
 
-        With the GO1 it is measured from the robot's true position on the level's
-        navigability grid (falling back to the graph when the viewpoint is on another
-        level); with the point body it is the graph's geodesic from the current viewpoint.
+        Measured from where the body truly is: the point body's viewpoint on the graph; the
+        GO1's trunk on its level's navigability grid (see
+        :meth:`~havln_mj.sim.legged_body.LeggedBody.goal_distance`).
 
         Raises:
             UnknownViewpointError: A viewpoint is unknown or excluded.
         """
-        agents = self._running()
+        elements = self._running()
         out = []
-        for a, vp in zip(agents, self._batch("viewpointId", viewpointId), strict=True):
-            graph = a.table.graph
-            here = a.navigable[0].viewpointId
-            d = graph.distance(here, vp)
-            if a.legged is not None:
-                goal = np.append(graph.position(vp)[:2], graph.floor_z(vp))
-                p = a.legged.position()
-                start = np.array([p[0], p[1], graph.floor_z(here)])
-                world = self._legged_worlds[a.table.scan_id][0]
-                on_grid = world.geodesic(start, goal)
-                d = on_grid if math.isfinite(on_grid) else d
-            out.append(float(d))
+        for el, vp in zip(elements, self._per_element("viewpointId", viewpointId), strict=True):
+            el.table.location(vp)  # raises for an unknown or excluded viewpoint
+            out.append(float(el.body.goal_distance(vp)))
         return out
 
-    @staticmethod
-    def _nearest_viewpoint(a: _Agent) -> str:
-        """The included viewpoint nearest the robot, preferring ones on its floor."""
-        graph = a.table.graph
-        pos = a.legged.position()
-        floor = pos[2] - a.legged.body.gains.foot_depth
-
-        def cost(vp: str) -> float:
-            p = graph.position(vp)
-            return float(np.hypot(*(p[:2] - pos[:2]))) + 10.0 * abs(graph.floor_z(vp) - floor)
-
-        return min(graph.nodes, key=cost)
-
     # ------------------------------------------------------------------ state
-
-    def _view_settings(self) -> ViewSettings:
-        cfg = self._cfg
-        return ViewSettings(cfg.width, cfg.height, cfg.vfov, cfg.depth, cfg.human_mask)
-
-    def _blank_images(self) -> tuple[np.ndarray, np.ndarray]:
-        """Shared read-only zero images for states that are not rendered."""
-        cfg = self._cfg
-        if self._blank is None or self._blank[0].shape[:2] != (cfg.height, cfg.width):
-            rgb = np.zeros((cfg.height, cfg.width, 3), np.uint8)
-            dtype = np.float32 if cfg.depth_units == "metres" else np.uint16
-            depth = np.zeros((cfg.height, cfg.width, 1), dtype)
-            rgb.flags.writeable = depth.flags.writeable = False
-            self._blank = (rgb, depth)
-        return self._blank
-
-    def _images(self, a: _Agent) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        cfg = self._cfg
-        if not cfg.rendering:
-            return (*self._blank_images(), None)
-        t0 = time.perf_counter()
-        if a.legged is not None:
-            view = self._legged_worlds[a.table.scan_id][1]
-            frame = view.render(a.legged, self._view_settings(), a.elevation, a.time)
-        else:
-            view = self._library.view(a.table.scan_id, self._view_settings(), a.crowd)
-            here = a.navigable[0]
-            frame = view.render(np.array([here.x, here.y, here.z]), a.heading, a.elevation, a.time)
-        rgb = frame.rgb if cfg.color_order == "RGB" else np.ascontiguousarray(frame.rgb[..., ::-1])
-        if frame.depth is None:
-            depth = self._blank_images()[1]
-        elif cfg.depth_units == "metres":
-            depth = frame.depth[..., None]
-        else:
-            depth = depth_to_mattersim(frame.depth)
-        self._timers["render"] += time.perf_counter() - t0
-        self._timers["frames"] += 1
-        return rgb, depth, frame.human_mask
-
-    def _publish(self, which: Sequence[int], near: Sequence[Proximity]) -> None:
-        for i, contact in zip(which, near, strict=True):
-            a = self._agents[i]
-            rgb, depth, mask = self._images(a)
-            a.state = SimState(
-                a.table.scan_id,
-                a.step,
-                rgb,
-                depth,
-                a.navigable[0],
-                a.heading,
-                a.elevation,
-                a.view_index,
-                a.navigable,
-                a.time,
-                int(contact.crushed),
-                contact.people,
-                contact.min_distance,
-                mask,
-                None if a.legged is None else np.append(a.legged.position(), a.heading),
-                a.legged is not None and a.legged.fell,
-                a.contacts,
-            )
 
     def getState(self) -> list[SimState]:  # noqa: N802
         """The current state of every batch element.
@@ -853,9 +518,8 @@ class Simulator:
         Raises:
             NotInitializedError: No episode has been started.
         """
-        if not self._agents:
-            raise NotInitializedError("getState called before newEpisode()")
-        return [a.state for a in self._agents]
+        self._started("getState")
+        return [el.state for el in self._batch.elements]
 
     def getHumanState(self) -> list[list]:  # noqa: N802
         """Each element's people at the element's time: a list of states per element.
@@ -863,29 +527,31 @@ class Simulator:
         A state (:class:`havln_mj.humans.crowd.PersonState`) has ``position`` (pelvis),
         ``heading``, ``velocity``, ``activity``, ``text`` and ``region``.
         """
-        if not self._agents:
-            raise NotInitializedError("getHumanState called before newEpisode()")
-        return [a.crowd.states(a.time) for a in self._agents]
+        self._started("getHumanState")
+        return [el.crowd.states(el.time) for el in self._batch.elements]
 
     def getHumanPositions(self) -> list[np.ndarray]:  # noqa: N802 - getHumanState's sibling
         """Each element's people's pelvis positions ``(K, 3)`` at the element's time.
 
         The ``position`` of every :meth:`getHumanState` entry, without computing the rest.
         """
-        if not self._agents:
-            raise NotInitializedError("getHumanPositions called before newEpisode()")
-        out = []
-        for a in self._agents:
-            out.append(
-                a.crowd.positions(np.array([a.time]))[0] if len(a.crowd) else np.zeros((0, 3))
-            )
-        return out
+        self._started("getHumanPositions")
+        return [el.crowd.positions(np.array([el.time]))[0] for el in self._batch.elements]
+
+    def _started(self, what: str) -> None:
+        if self._batch is None or not self._batch.elements:
+            raise NotInitializedError(f"{what} called before newEpisode()")
 
     # ------------------------------------------------------------------ timing
 
     def resetTimers(self) -> None:  # noqa: N802
         """Zeroes the timers ``timingInfo`` reports."""
         self._timers = {"process": 0.0, "render": 0.0, "frames": 0}
+
+    def timing(self) -> dict[str, float]:
+        """Seconds in simulator calls and in rendering, and frames rendered, since the reset."""
+        t = self._timers
+        return {"process_s": t["process"], "render_s": t["render"], "frames": t["frames"]}
 
     def timingInfo(self) -> str:  # noqa: N802
         """Time spent in simulator calls and in rendering since the last reset."""
@@ -907,3 +573,16 @@ class Simulator:
     get_geodesic_distance = getGeodesicDistance
     get_state = getState
     get_human_state = getHumanState
+
+
+def _reactions(value: object) -> object | None:
+    """The reactions of ``reactions=`` (None when people do not react)."""
+    if value is False:
+        return None
+    from havln_mj.humans.reactions import Reactions  # the humans package, only when used
+
+    if value is True:
+        return Reactions()
+    if isinstance(value, Reactions):
+        return value if value.enabled else None
+    raise InvalidArgumentError(f"reactions takes a bool or a Reactions, got {value!r}")

@@ -84,15 +84,21 @@ class SimState:
             (metres; ``inf`` in a scene without people).
         humanMask: H×W ``bool``, True where a person is seen; None unless the human mask is
             enabled (and rendering is on).
-        pose: With the GO1: its true trunk pose ``(x, y, z, heading)``; None for the point body.
+        pose: The body's true pose ``(x, y, z, heading)``: the camera rig's for the point
+            body, the trunk's for the GO1.
         fell: With the GO1: the robot has fallen (the episode is over).
         humanContacts: With the GO1 and solid people: most robot–person contacts at once
             during the last action.
+        arrived: Whether the last action's move reached its target viewpoint. When False,
+            ``location`` is the last viewpoint the body stood at, not the target.
+        diverged: With the GO1: the physics diverged (the episode is over).
     """
 
     __slots__ = (
+        "arrived",
         "crushedBy",
         "depth",
+        "diverged",
         "elevation",
         "fell",
         "heading",
@@ -129,6 +135,8 @@ class SimState:
         pose: np.ndarray | None = None,
         fell: bool = False,
         humanContacts: int = 0,  # noqa: N803
+        arrived: bool = True,
+        diverged: bool = False,
     ) -> None:
         self.scanId = scanId
         self.step = step
@@ -147,6 +155,8 @@ class SimState:
         self.pose = pose
         self.fell = fell
         self.humanContacts = humanContacts
+        self.arrived = arrived
+        self.diverged = diverged
 
     def __repr__(self) -> str:
         return (

@@ -19,7 +19,7 @@ import trimesh
 from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.humans.body import BodyShape
-from havln_mj.humans.mujoco_people import add_people
+from havln_mj.humans.mujoco_people import DRAW_STYLES, add_people
 from havln_mj.humans.skinned import Skin
 from havln_mj.robot.point_body import add_point_body
 from havln_mj.scene.collision import CoacdParams, decompose
@@ -41,6 +41,9 @@ class WorldOptions:
         collision_chunk: Tile size (m) for CoACD pieces when the scan has no regions.
         offscreen: (width, height) of the offscreen buffer (renderers enlarge it as needed).
         vfov_deg: Vertical field of view of the agent camera.
+        people_style: How people are drawn: ``"pieces"`` (dressed bodies as rigid pieces
+            on their joints; the default, no per-frame upload), ``"skinned"`` (the same
+            bodies skinned every frame) or ``"capsules"`` (mannequins).
     """
 
     collision: str = "auto"
@@ -49,11 +52,16 @@ class WorldOptions:
     collision_chunk: float = 6.0
     offscreen: tuple[int, int] = (640, 480)
     vfov_deg: float = 60.0
+    people_style: str = "pieces"
 
     def __post_init__(self) -> None:
         if self.collision not in COLLISION_MODES:
             raise InvalidArgumentError(
                 f"collision mode {self.collision!r} unknown; valid: {', '.join(COLLISION_MODES)}"
+            )
+        if self.people_style not in DRAW_STYLES:
+            raise InvalidArgumentError(
+                f"people style {self.people_style!r} unknown; valid: {', '.join(DRAW_STYLES)}"
             )
 
 
@@ -239,7 +247,8 @@ def build_world(
         The compiled world.
     """
     t0 = time.perf_counter()
+    options = options or WorldOptions()
     spec, mode, n = world_spec(scan, options)
-    add_people(spec, list(people), skins)
+    add_people(spec, list(people), skins, style=options.people_style)
     model = spec.compile()
     return World(model, scan, mode, n, time.perf_counter() - t0)

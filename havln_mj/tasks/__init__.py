@@ -1,1 +1,1 @@
-"""Task layer: episodes, experts and metrics (filled by the benchmark issue)."""
+"""Task layer: episodes, the task step, experts, metrics and the gym-free episode environment."""

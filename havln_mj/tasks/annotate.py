@@ -23,7 +23,7 @@ from itertools import pairwise
 import numpy as np
 
 from havln_mj.scene.navgraph import NavGraph
-from havln_mj.tasks.datasets import HumanOnPath
+from havln_mj.tasks.episodes import HumanOnPath
 
 REL_POS_RADIUS = 1.5  # metres, HA3D getRelPos
 

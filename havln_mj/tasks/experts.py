@@ -15,38 +15,40 @@
 with the state after it, the collision signal, the simulated time and the rewards of
 :mod:`havln_mj.tasks.rewards`.
 
-Distances to people are horizontal, from a viewpoint (or the agent) to a pelvis, as the
-simulator's collision signal measures them; a person counts only on the viewpoint's storey
-(pelvis between 0.5 m below and 2 m above the viewpoint's floor). Paths are shortest by
-length (HA3D's sub-optimal expert counts hops; ``weighted=False`` does that).
+Paths are shortest by length (HA3D's sub-optimal expert counts hops; ``weighted=False`` does
+that); the planning they follow is in :mod:`havln_mj.tasks.planning` (graph paths around
+people) and :mod:`havln_mj.tasks.ego_routes` (egocentric routes).
 """
 
 from __future__ import annotations
 
-import heapq
 import math
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Protocol, Union
+from typing import Protocol
 
 import numpy as np
 
 from havln_mj.errors import InvalidArgumentError
-from havln_mj.frames import heading_to, wrap_angle
+from havln_mj.frames import wrap_angle
 from havln_mj.scene.navgraph import NavGraph
-from havln_mj.sim.egocentric import DEFAULT_TURN, EgoAction
+from havln_mj.sim.egocentric import EgoAction
 from havln_mj.sim.state import SimState
-from havln_mj.tasks.datasets import Episode
-from havln_mj.tasks.rewards import RewardFn, StepOutcome, get_reward
+from havln_mj.tasks.ego_routes import EgoRoutes, ego_plan, forward_target
+from havln_mj.tasks.episodes import Episode
+from havln_mj.tasks.planning import (
+    CLEARANCE,
+    SIGHT_RADIUS,
+    TURN,
+    PathPlanner,
+    graph_teacher,
+    people_near,
+    plan_path,
+)
+from havln_mj.tasks.rewards import RewardFn
+from havln_mj.tasks.step import STOP, Action, GraphAction, StepResult, TaskStep
 
-GraphAction = tuple[int, float, float]
-Action = Union[EgoAction, GraphAction]  # noqa: UP007 - a runtime alias; `|` fails on tuple[...]
-STOP = EgoAction.STOP  # ends the episode in either action space
 WAIT: GraphAction = (0, 0.0, 0.0)
-TURN = DEFAULT_TURN  # 30°: one discrete view step, and the teacher's heading tolerance
-SIGHT_RADIUS = 4.5  # metres: HA3D's expert avoids people this close to the agent
-CLEARANCE = 1.0  # metres: nodes this close to such a person are removed
-STOREY_BELOW, STOREY_ABOVE = 0.5, 2.0  # a pelvis this far below / above a floor is on it
 # MatterSim's default camera (VFOV 0.8 rad, 320×240), when the simulator cannot tell.
 DEFAULT_HALF_HFOV = 0.8 * 320 / 240 / 2
 
@@ -103,277 +105,6 @@ class Expert(Protocol):
             index, dHeading, dElevation)``.
         """
         ...
-
-
-# ---------------------------------------------------------------------- geometry and planning
-
-
-def _floors(graph: NavGraph, nodes: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
-    xy = np.array([graph.position(v)[:2] for v in nodes]).reshape(-1, 2)
-    return xy, np.array([graph.floor_z(v) for v in nodes])
-
-
-def _near(xy: np.ndarray, floor: np.ndarray, people: np.ndarray, radius: float) -> np.ndarray:
-    """(N,) bool: points (xy, floor height) with a pelvis within ``radius`` on their storey."""
-    if len(people) == 0 or len(xy) == 0:
-        return np.zeros(len(xy), bool)
-    d = np.hypot(xy[:, None, 0] - people[None, :, 0], xy[:, None, 1] - people[None, :, 1])
-    dz = people[None, :, 2] - floor[:, None]
-    return ((d <= radius) & (dz >= -STOREY_BELOW) & (dz <= STOREY_ABOVE)).any(axis=1)
-
-
-def people_near(
-    graph: NavGraph, vp: str, people: Iterable[np.ndarray], radius: float = SIGHT_RADIUS
-) -> np.ndarray:
-    """The pelvis positions ``(K, 3)`` within ``radius`` of viewpoint ``vp``, on its storey."""
-    pts = np.asarray(list(people), float).reshape(-1, 3)
-    xy, floor = _floors(graph, [vp])
-    keep = [bool(_near(xy, floor, p[None], radius)[0]) for p in pts]
-    return pts[np.array(keep, bool)] if len(pts) else pts
-
-
-def blocked_nodes(
-    graph: NavGraph,
-    people: Iterable[np.ndarray],
-    clearance: float = CLEARANCE,
-    keep: Iterable[str] = (),
-) -> set[str]:
-    """The graph nodes within ``clearance`` of any of ``people`` (pelvis positions).
-
-    Nodes in ``keep`` (the agent's and the goal) are never blocked.
-    """
-    pts = np.asarray(list(people), float).reshape(-1, 3)
-    xy, floor = _floors(graph, graph.nodes)
-    hit = _near(xy, floor, pts, clearance)
-    return {graph.nodes[i] for i in np.flatnonzero(hit)} - set(keep)
-
-
-def plan_path(
-    graph: NavGraph,
-    start: str,
-    goal: str,
-    blocked: Iterable[str] = (),
-    *,
-    weighted: bool = True,
-) -> list[str] | None:
-    """A shortest path from ``start`` to ``goal`` avoiding ``blocked`` nodes, or None.
-
-    With nothing blocked and ``weighted`` it is ``graph.shortest_path`` (R2R's choice among
-    equal paths). ``weighted=False`` counts edges, as HA3D's expert does.
-    """
-    blocked = set(blocked) - {start, goal}
-    if not blocked and weighted:
-        return (
-            graph.shortest_path(start, goal) if math.isfinite(graph.distance(start, goal)) else None
-        )
-    order = {v: i for i, v in enumerate(graph.nodes)}
-    best = {start: 0.0}
-    prev: dict[str, str] = {}
-    heap = [(0.0, order[start], start)]
-    while heap:
-        d, _, v = heapq.heappop(heap)
-        if v == goal:
-            path = [goal]
-            while path[-1] != start:
-                path.append(prev[path[-1]])
-            return path[::-1]
-        if d > best[v]:
-            continue
-        for u in graph.neighbors(v):
-            if u in blocked:
-                continue
-            nd = d + (math.dist(graph.position(v), graph.position(u)) if weighted else 1.0)
-            if nd < best.get(u, math.inf):
-                best[u], prev[u] = nd, v
-                heapq.heappush(heap, (nd, order[u], u))
-    return None
-
-
-# ---------------------------------------------------------------------- teachers
-
-
-def graph_teacher(state: SimState, next_vp: str, graph: NavGraph) -> GraphAction:
-    """R2R's teacher action towards the neighbouring viewpoint ``next_vp``.
-
-    Move when it is listed and within ±30° of the heading (looking up or down first when it
-    is more than 30° above or below the camera); otherwise level the camera, then turn 30°
-    towards it.
-    """
-    for i, loc in enumerate(state.navigableLocations[1:], start=1):
-        if loc.viewpointId != next_vp:
-            continue
-        if loc.rel_heading > TURN:
-            return (0, TURN, 0.0)
-        if loc.rel_heading < -TURN:
-            return (0, -TURN, 0.0)
-        if loc.rel_elevation > TURN and state.elevation < TURN / 2:
-            return (0, 0.0, TURN)
-        if loc.rel_elevation < -TURN and state.elevation > -TURN / 2:
-            return (0, 0.0, -TURN)
-        return (i, 0.0, 0.0)
-    if state.elevation > TURN / 2:
-        return (0, 0.0, -TURN)
-    if state.elevation < -TURN / 2:
-        return (0, 0.0, TURN)
-    here = state.location.position
-    rel = wrap_angle(heading_to(here, graph.position(next_vp)) - state.heading)
-    return (0, TURN if rel >= 0 else -TURN, 0.0)
-
-
-def forward_target(
-    graph: NavGraph, here: str, heading: float, elevation: float, half_hfov: float
-) -> str | None:
-    """Where FORWARD goes from ``here`` at ``heading``/``elevation``, or None (it waits).
-
-    The simulator's rule: of the neighbours within ``half_hfov`` of the heading, the one
-    nearest the view centre (``hypot(rel_heading, rel_elevation)``, ties in file order).
-    """
-    x0, y0, z0 = graph.position(here)
-    best, best_key = None, math.inf
-    for vp in graph.neighbors(here):
-        x, y, z = graph.position(vp)
-        flat = math.hypot(x - x0, y - y0)
-        if flat == 0.0:
-            continue  # straight above or below: no bearing, never navigable
-        rel = wrap_angle(math.atan2(x - x0, y - y0) - heading)
-        if abs(rel) > half_hfov:
-            continue
-        key = math.hypot(rel, math.atan2(z - z0, flat) - elevation)
-        if key < best_key:
-            best, best_key = vp, key
-    return best
-
-
-TURN_COST = 1e-3  # metres an egocentric turn "costs": fewest turns among shortest routes
-
-
-def ego_plan(
-    graph: NavGraph,
-    start: str,
-    heading: float,
-    goal: str,
-    half_hfov: float,
-    blocked: Iterable[str] = (),
-) -> list[EgoAction] | None:
-    """The shortest egocentric action sequence from ``start`` at ``heading`` to ``goal``.
-
-    Searches (viewpoint, heading) states, headings 30° apart from ``heading``, with the
-    simulator's FORWARD rule (:func:`forward_target`, camera level): the route is shortest in
-    metres, then in turns. FORWARD cannot reach every neighbour (another one may always be
-    nearer the view centre), so this can differ from the graph's shortest path. FORWARD never
-    enters a ``blocked`` viewpoint (``start`` and ``goal`` are never blocked).
-
-    Returns:
-        The actions, ending with STOP; None when FORWARD and turns cannot reach ``goal``.
-    """
-    blocked = set(blocked) - {start, goal}
-    n = round(2 * math.pi / TURN)
-    order = {v: i for i, v in enumerate(graph.nodes)}
-    begin = (start, 0)
-    best = {begin: 0.0}
-    prev: dict[tuple[str, int], tuple[tuple[str, int], EgoAction]] = {}
-    heap = [(0.0, order[start], 0, begin)]
-    while heap:
-        d, _, _, node = heapq.heappop(heap)
-        vp, k = node
-        if vp == goal:
-            actions = [EgoAction.STOP]
-            while node != begin:
-                node, action = prev[node]
-                actions.append(action)
-            return actions[::-1]
-        if d > best[node]:
-            continue
-        moves = [((vp, (k + 1) % n), EgoAction.TURN_RIGHT, TURN_COST)]
-        moves.append(((vp, (k - 1) % n), EgoAction.TURN_LEFT, TURN_COST))
-        ahead = forward_target(graph, vp, heading + k * TURN, 0.0, half_hfov)
-        if ahead is not None and ahead not in blocked:
-            length = math.dist(graph.position(vp), graph.position(ahead))
-            moves.append(((ahead, k), EgoAction.FORWARD, length))
-        for nxt, action, cost in moves:
-            nd = d + cost
-            if nd < best.get(nxt, math.inf):
-                best[nxt], prev[nxt] = nd, (node, action)
-                heapq.heappush(heap, (nd, order[nxt[0]], nxt[1], nxt))
-    return None
-
-
-class EgoRoutes:
-    """Egocentric cost-to-go on one graph for any goal and avoided viewpoints (cached).
-
-    The costs of :func:`ego_plan` (metres, plus :data:`TURN_COST` per turn) over the states
-    (viewpoint, heading on the 30° lattice), found by one backward search per (goal, avoided
-    set) instead of a forward search per state: a teacher that labels every state a learner
-    reaches asks for the same few tables again and again.
-
-    Args:
-        graph: The navigation graph.
-        half_hfov: FORWARD's half field of view.
-        cache_size: Tables kept (least recently used dropped).
-    """
-
-    def __init__(self, graph: NavGraph, half_hfov: float, cache_size: int = 256) -> None:
-        self.graph, self.half_hfov, self.cache_size = graph, half_hfov, cache_size
-        self._n = round(2 * math.pi / TURN)
-        self._ahead: dict[tuple[str, int], tuple[str, float]] = {}
-        self._into: dict[tuple[str, int], list[tuple[str, float]]] = {}
-        for vp in graph.nodes:
-            for k in range(self._n):
-                target = forward_target(graph, vp, k * TURN, 0.0, half_hfov)
-                if target is not None:
-                    length = math.dist(graph.position(vp), graph.position(target))
-                    self._ahead[(vp, k)] = (target, length)
-                    self._into.setdefault((target, k), []).append((vp, length))
-        self._tables: dict[tuple[str, frozenset[str]], dict[tuple[str, int], float]] = {}
-
-    def heading_step(self, heading: float) -> int | None:
-        """The lattice step of ``heading``, or None when it is off the 30° lattice."""
-        k = round(heading / TURN)
-        return k % self._n if abs(heading - k * TURN) < 1e-6 else None
-
-    def cost_to_go(self, goal: str, avoid: frozenset[str]) -> dict[tuple[str, int], float]:
-        """Cost from every state to ``goal`` without FORWARD into ``avoid`` (absent: none)."""
-        key = (goal, avoid)
-        table = self._tables.pop(key, None)
-        if table is None:
-            table = {}
-            heap = [(0.0, goal, k) for k in range(self._n)]
-            while heap:
-                d, vp, k = heapq.heappop(heap)
-                if (vp, k) in table:
-                    continue
-                table[(vp, k)] = d
-                prev = [(vp, (k - 1) % self._n, TURN_COST), (vp, (k + 1) % self._n, TURN_COST)]
-                if vp not in avoid or vp == goal:
-                    prev += [(u, k, length) for u, length in self._into.get((vp, k), ())]
-                for u, j, cost in prev:
-                    if (u, j) not in table:
-                        heapq.heappush(heap, (d + cost, u, j))
-            if len(self._tables) >= self.cache_size:
-                self._tables.pop(next(iter(self._tables)))
-        self._tables[key] = table
-        return table
-
-    def first_action(
-        self, here: str, step: int, goal: str, avoid: frozenset[str]
-    ) -> EgoAction | None:
-        """The first action of a cheapest route (FORWARD, then right, then left on ties).
-
-        Returns:
-            STOP at the goal; None when no route avoids ``avoid``.
-        """
-        if here == goal:
-            return STOP
-        table = self.cost_to_go(goal, avoid - {here})
-        best, action = math.inf, None
-        ahead = self._ahead.get((here, step))
-        if ahead is not None and (ahead[0] not in avoid or ahead[0] == goal):
-            best, action = ahead[1] + table.get((ahead[0], step), math.inf), EgoAction.FORWARD
-        for turn, j in ((EgoAction.TURN_RIGHT, step + 1), (EgoAction.TURN_LEFT, step - 1)):
-            cost = TURN_COST + table.get((here, j % self._n), math.inf)
-            if cost < best - 1e-9:
-                best, action = cost, turn
-        return action if math.isfinite(best) else None
 
 
 def _level_camera(state: SimState) -> EgoAction | None:
@@ -524,14 +255,27 @@ class HumanAwareExpert:
         self._avoid: frozenset[str] = frozenset()  # global mode, egocentric actions
         self._hfov = DEFAULT_HALF_HFOV
         self._routes: dict[str, EgoRoutes] = {}
+        self._planners: dict[str, PathPlanner] = {}
 
     @staticmethod
     def _people(ctx: ExpertContext) -> np.ndarray:
         return np.asarray(ctx.sim.getHumanPositions()[0], float).reshape(-1, 3)
 
+    def _planner(self, ctx: ExpertContext) -> PathPlanner:
+        planner = self._planners.get(ctx.episode.scan)
+        if planner is None or planner.graph is not ctx.graph:
+            planner = self._planners[ctx.episode.scan] = PathPlanner(ctx.graph)
+        return planner
+
+    def _blocked_near(self, ctx: ExpertContext, here: str) -> set[str]:
+        """Local mode: the nodes near the people within sight of ``here``."""
+        near = people_near(ctx.graph, here, self._people(ctx), self.sight_radius)
+        return self._planner(ctx).blocked(near, self.clearance, (here, ctx.goal))
+
     def _global_route(self, ctx: ExpertContext, here: str) -> list[str] | None:
-        blocked = blocked_nodes(ctx.graph, self._people(ctx), self.clearance, (here, ctx.goal))
-        return plan_path(ctx.graph, here, ctx.goal, blocked, weighted=self.weighted)
+        planner = self._planner(ctx)
+        blocked = planner.blocked(self._people(ctx), self.clearance, (here, ctx.goal))
+        return planner.plan(here, ctx.goal, blocked, weighted=self.weighted)
 
     def reset(self, ctx: ExpertContext) -> None:
         """Plans G' once (global mode)."""
@@ -540,7 +284,7 @@ class HumanAwareExpert:
         if self.action_space == "ego":
             keep = (ctx.episode.start, ctx.goal)
             people = self._people(ctx) if self.mode == "global" else ()
-            self._avoid = frozenset(blocked_nodes(ctx.graph, people, self.clearance, keep))
+            self._avoid = frozenset(self._planner(ctx).blocked(people, self.clearance, keep))
             return
         self._route = self._global_route(ctx, ctx.episode.start) if self.mode == "global" else None
 
@@ -552,8 +296,7 @@ class HumanAwareExpert:
         if here == goal:
             return STOP
         if self.mode == "local":
-            near = people_near(graph, here, self._people(ctx), self.sight_radius)
-            avoid = frozenset(blocked_nodes(graph, near, self.clearance, (here, goal)))
+            avoid = frozenset(self._blocked_near(ctx, here))
         else:
             avoid = self._avoid - {here}
         routes = self._routes.get(ctx.episode.scan)
@@ -580,9 +323,8 @@ class HumanAwareExpert:
         if here == goal:
             return STOP
         if self.mode == "local":
-            near = people_near(graph, here, self._people(ctx), self.sight_radius)
-            blocked = blocked_nodes(graph, near, self.clearance, (here, goal))
-            path = plan_path(graph, here, goal, blocked, weighted=self.weighted)
+            blocked = self._blocked_near(ctx, here)
+            path = self._planner(ctx).plan(here, goal, blocked, weighted=self.weighted)
         else:
             if self._route is None or here not in self._route:
                 self._route = self._global_route(ctx, here)
@@ -749,19 +491,19 @@ def _sim_graph(sim: object, scan: str) -> NavGraph:
     return graph(scan)
 
 
-def _record(
-    state: SimState, action: Action | None, distance: float, rewards: Mapping[str, float]
-) -> StepRecord:
+def _record(result: StepResult) -> StepRecord:
+    state = result.state
+    rewards = {**result.reward_terms, "total": result.reward} if result.action is not None else {}
     return StepRecord(
-        action,
+        result.action,
         state.location.viewpointId,
         float(state.heading),
         float(state.elevation),
-        int(state.isCrushed),
-        tuple(state.crushedBy),
+        int(result.collided),
+        result.crushed_by,
         float(state.time),
-        distance,
-        dict(rewards),
+        result.distance,
+        rewards,
     )
 
 
@@ -775,10 +517,11 @@ def run_expert(
     max_steps: int | None = None,
     instruction: int = 0,
 ) -> Trajectory:
-    """Runs ``expert`` through ``episode`` on ``sim`` (batch size 1).
+    """Runs ``expert`` through ``episode`` on ``sim`` (batch size 1) with the task step.
 
     Starts the episode at its start viewpoint, heading and elevation 0, then asks the expert
-    for actions until it says STOP or ``max_steps`` actions were taken.
+    for actions until it says STOP or ``max_steps`` actions were taken. Collisions, rewards
+    and distances are the task step's (:mod:`havln_mj.tasks.step`).
 
     Args:
         sim: A ``havln_mj.Simulator`` (rendering may be off).
@@ -793,39 +536,16 @@ def run_expert(
     Returns:
         The trajectory, with per-step rewards.
     """
-    reward_fn = get_reward(reward)
     cap = _positive("max_steps", expert.max_steps if max_steps is None else max_steps)
-    sim.newEpisode([episode.scan], [episode.start], [episode.heading], [0.0])
-    graph = graph or _sim_graph(sim, episode.scan)
     episode.instruction(instruction)  # raises for an index the episode does not have
+    task = TaskStep(sim, reward=reward, max_steps=cap)
+    result = task.start([episode])[0]
+    graph = graph or _sim_graph(sim, episode.scan)
     ctx = ExpertContext(sim, episode, graph, instruction=instruction)
-    state = sim.getState()[0]
-    dist = graph.distance(state.location.viewpointId, episode.goal)
-    records = [_record(state, None, dist, {})]
+    records = [_record(result)]
     expert.reset(ctx)
-    stopped = False
-    while ctx.step < cap:
-        action = expert.act(ctx, state)
-        stopped = action is STOP
-        if not stopped:
-            if isinstance(action, EgoAction):
-                sim.makeEgoAction([action])
-            else:
-                index, dh, de = action
-                sim.makeAction([int(index)], [float(dh)], [float(de)])
-            state = sim.getState()[0]
-        new = graph.distance(state.location.viewpointId, episode.goal)
-        collided = bool(state.isCrushed) and not stopped
-        terms = reward_fn(StepOutcome(stopped, new, new - dist, collided))
-        terms = {**terms, "total": float(sum(terms.values()))}
-        rec = _record(state, action, new, terms)
-        if stopped:  # STOP does not act: no collision, no time
-            rec = StepRecord(
-                STOP, rec.viewpoint, rec.heading, rec.elevation, 0, (), rec.time, new, terms
-            )
-        records.append(rec)
-        dist = new
+    while not result.done:
+        result = task.step([expert.act(ctx, result.state)])[0]
+        records.append(_record(result))
         ctx.step += 1
-        if stopped:
-            break
-    return Trajectory(episode, expert.name, tuple(records), stopped)
+    return Trajectory(episode, expert.name, tuple(records), result.stopped)

@@ -15,6 +15,7 @@ of every instruction.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 import zlib
@@ -33,8 +34,10 @@ from havln_mj.humans.crowd import Crowd
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.scan import Scan, load_scan
 from havln_mj.tasks.annotate import crux_points
-from havln_mj.tasks.datasets import SPLITS, Episode, write_dataset
-from havln_mj.tasks.instructions import describe_route, generate_instructions, tokenize
+from havln_mj.tasks.datasets import SPLITS, write_dataset
+from havln_mj.tasks.episodes import Episode
+from havln_mj.tasks.instructions import generate_instructions, tokenize
+from havln_mj.tasks.route_facts import describe_route
 
 MIN_VIEWPOINTS, MAX_VIEWPOINTS = 4, 7  # R2R's path sizes
 MIN_DISTANCE, MAX_DISTANCE = 5.0, 20.0  # metres
@@ -155,12 +158,16 @@ def procedural_episodes(
     """Episodes of several procedural scenes (the evaluation harness's ``--scenes``).
 
     Scene ``s`` (in the given order) gets path ids from ``first_id + 10_000 * s``; ``skip``
-    leaves out each scene's first paths (another split's: val_seen after train).
+    leaves out each scene's first paths (another split's: val_seen after train). Episodes name
+    their scene as given (a scan folder by its path), so the simulator finds it again.
     """
     out: list[Episode] = []
     for s, scene in enumerate(scenes):
         first = first_id + SCENE_STRIDE * s
-        out += scene_episodes(load_scan(scene), per_scene, seed, first_path_id=first, skip=skip)
+        scan = load_scan(scene)
+        if scan.scene_id != scene:
+            scan = dataclasses.replace(scan, scene_id=scene)
+        out += scene_episodes(scan, per_scene, seed, first_path_id=first, skip=skip)
     return out
 
 

@@ -9,8 +9,8 @@ reward is their sum. ``"paper"`` is the HA-VLN paper's definition:
   and waiting included); STOP gets none;
 * human: −2 when the action collided with a person.
 
-``"strategy_1"`` … ``"strategy_6"`` are the strategies of HA3D's ``reward.py`` (see
-``reference/ha3d_facts.md`` §5): 1 target ±5 only; 2 = 1 plus collision −2; 3 collision −2
+``"strategy_1"`` … ``"strategy_6"`` are the strategies of the HA3D simulator's
+``reward.py``: 1 target ±5 only; 2 = 1 plus collision −2; 3 collision −2
 only; 4 = 2 plus ±1 for getting closer / farther; 5 = 2 plus −1 for getting farther; 6 = 4 with
 a collision −5.
 """

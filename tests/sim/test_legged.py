@@ -115,7 +115,7 @@ def test_a_fall_ends_the_episode(edge):
     a, _, h = edge
     sim = _sim()
     sim.newEpisode([SCAN], [a], [h], [0.0])
-    legged = sim._agents[0].legged  # tip the robot onto its back
+    legged = sim._batch.elements[0].body.agent  # tip the robot onto its back
     qa = legged.body.qadr
     legged.data.qpos[qa + 2] += 0.2
     legged.data.qpos[qa + 3 : qa + 7] = (0.0, 1.0, 0.0, 0.0)
@@ -191,7 +191,7 @@ def test_the_building_sleeps_and_the_robot_never_does(edge):
     a, _, h = edge
     sim = _sim()
     sim.newEpisode([SCAN], [a], [h], [0.0])
-    legged = sim._agents[0].legged
+    legged = sim._batch.elements[0].body.agent
     assert legged.world.model.opt.enableflags & mujoco.mjtEnableBit.mjENBL_SLEEP
     z0 = legged.position()[2]
     legged.run([("stand", 3.0)], 0.0)
@@ -199,3 +199,37 @@ def test_the_building_sleeps_and_the_robot_never_does(edge):
     assert legged.position()[2] == pytest.approx(z0, abs=0.03)
     sim.makeRobotAction(["forward"])
     assert not sim.getState()[0].fell
+
+
+def test_a_move_that_stalls_short_never_reports_the_target(tmp_path, edge, graph):
+    # A scan folder whose edge a-b is blocked by a wall across its middle: the robot walks
+    # into it and stops. The state must say where it really stands: still at a, not arrived,
+    # its true pose well short of b; the point body, which does not collide, arrives.
+    import json
+    import shutil
+
+    a, b, h = edge
+    folder = tmp_path / "walled"
+    shutil.copytree(load_scan(SCAN).folder, folder)
+    boxes = json.loads((folder / "boxes.json").read_text())
+    pa, pb = graph.position(a), graph.position(b)
+    mid, floor = (pa + pb) / 2, graph.floor_z(a)
+    half = np.array([1.2, 1.2])
+    boxes["boxes"].append(
+        {
+            "lo": [*(mid[:2] - half), floor],
+            "hi": [*(mid[:2] + half), floor + 1.0],
+            "kind": "furniture",
+            "material": "test_wall",
+            "rgba": [1.0, 0.0, 0.0, 1.0],
+        }
+    )
+    (folder / "boxes.json").write_text(json.dumps(boxes))
+    sim = _sim()
+    sim.newEpisode([str(folder)], [a], [h], [0.0])
+    ids = [v.viewpointId for v in sim.getState()[0].navigableLocations]
+    sim.makeAction([ids.index(b)], [0.0], [0.0])
+    state = sim.getState()[0]
+    assert not state.arrived and state.location.viewpointId == a
+    assert np.hypot(*(state.pose[:2] - pb[:2])) > 1.0
+    assert sim.getGeodesicDistance([b])[0] > 1.0  # measured from where it stands

@@ -158,3 +158,64 @@ def test_wait_lets_people_move_and_checks_collisions_throughout():
         one.wait([-1.0])
     with pytest.raises(IndexError, match="batch size"):
         one.wait([1.0, 1.0])
+
+
+@pytest.mark.parametrize("body", ["point", "go1"])
+def test_skinned_people_appear_with_either_body(graph, blob_smpl, body):
+    # A person drawn as an SMPL skin (a user's model file) 2.5 m ahead of a viewpoint: the
+    # frame pipeline poses skins for every body, the GO1's head camera included.
+    from havln_mj.humans.skinned import Skin
+    from havln_mj.sim.legged import LeggedOptions
+
+    vp = max(graph.nodes, key=graph.degree)
+    eye = graph.position(vp)
+    spot = np.array([eye[0], eye[1] + 2.5, graph.floor_z(vp)])
+
+    def skinned(scan_id, g, rng):
+        clip = idle(1.7, rng)
+        return Crowd([Person(BodyShape(1.7), clip, spot, math.pi, "idle", skin=Skin(blob_smpl))])
+
+    sim = MatterSim.Simulator(humans=skinned, body=body, legged=LeggedOptions(camera_height=1.2))
+    sim.setCameraResolution(96, 72)
+    sim.set_human_mask_enabled(True)
+    sim.newEpisode([SCAN], [vp], [0.0], [-0.1])
+    state = sim.getState()[0]
+    sim.close()
+    assert state.humanMask.mean() > 0.002, body
+
+
+def test_people_react_to_the_agent_that_stands_in_their_way(graph):
+    # A walker paces a 6 m corridor through a viewpoint where the agent waits: with
+    # reactions it stops at the comfort distance, so no collision; without, it walks
+    # through the agent. Each element's people react to that element alone.
+    from havln_mj.humans.catalog import load_catalog, make_clip
+
+    vp = max(graph.nodes, key=graph.degree)
+    eye = graph.position(vp)
+    start = np.array([eye[0], eye[1] - 3.0, graph.floor_z(vp)])
+
+    def walker(scan_id, g, rng):
+        pace = load_catalog().get("hallway/hall-call")
+        clip = make_clip(pace, 1.7, rng, path=np.array([[0.0, 0.0], [0.0, 6.0]]))
+        return Crowd([Person(BodyShape(1.7), clip, start, 0.0, pace.id, start=0.0)])
+
+    def wait(reactions):
+        sim = MatterSim.Simulator(humans=walker, reactions=reactions)
+        sim.setRenderingEnabled(False)
+        sim.setBatchSize(2)
+        far = next(v for v in graph.nodes if np.hypot(*(graph.position(v) - eye)[:2]) > 8)
+        sim.newEpisode([SCAN, SCAN], [vp, far], [0.0, 0.0], [0.0, 0.0])
+        hits, closest = [], []
+        for _ in range(12):
+            sim.wait([2.0, 2.0])
+            hits.append([s.isCrushed for s in sim.getState()])
+            closest.append(sim.getState()[0].minHumanDistance)
+        return np.array(hits), min(closest)
+
+    calm, calm_closest = wait(True)
+    blind, _ = wait(False)
+    assert blind[:, 0].any() and not calm[:, 0].any()
+    assert calm_closest >= 1.5 - 0.05
+    assert not blind[:, 1].any() and not calm[:, 1].any()  # the far element never met anyone
+    again, _ = wait(True)
+    assert np.array_equal(calm, again)

@@ -17,13 +17,8 @@ from havln_mj.errors import (
 from havln_mj.scene.connectivity import Connectivity, write_connectivity
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.tasks.annotate import crux_points, humans_on_path, rel_pos
-from havln_mj.tasks.datasets import (
-    Episode,
-    HumanOnPath,
-    load_dataset,
-    resolve_dataset_path,
-    write_dataset,
-)
+from havln_mj.tasks.datasets import load_dataset, resolve_dataset_path, write_dataset
+from havln_mj.tasks.episodes import Episode, HumanOnPath
 
 SCAN = "toyScan0001"
 VPS = ["vp_a", "vp_b", "vp_c", "vp_d"]

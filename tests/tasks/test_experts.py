@@ -14,23 +14,19 @@ from havln_mj.humans.crowd import Crowd, Person
 from havln_mj.humans.motion import idle
 from havln_mj.scene.scan import load_scan
 from havln_mj.sim.egocentric import EgoAction
-from havln_mj.tasks.datasets import Episode, load_dataset
+from havln_mj.tasks.datasets import load_dataset
+from havln_mj.tasks.ego_routes import TURN_COST, EgoRoutes, ego_plan, forward_target
+from havln_mj.tasks.episodes import Episode
 from havln_mj.tasks.experts import (
     STOP,
-    TURN,
-    TURN_COST,
     WAIT,
-    EgoRoutes,
     HumanAwareExpert,
     RandomWalkExpert,
     ShortestPathExpert,
     StepRecord,
-    blocked_nodes,
-    ego_plan,
-    forward_target,
-    plan_path,
     run_expert,
 )
+from havln_mj.tasks.planning import TURN, blocked_nodes, plan_path
 from havln_mj.tasks.rewards import REWARDS, StepOutcome, get_reward
 
 SCAN = "proc-0"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import math
 from pathlib import Path
 
@@ -14,15 +15,10 @@ from havln_mj.humans.crowd import Crowd
 from havln_mj.scene.connectivity import Connectivity
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.scan import Scan, load_scan
-from havln_mj.tasks.instructions import (
-    TURNS,
-    describe_route,
-    generate_instructions,
-    room_name,
-    tokenize,
-    word_count,
-)
+from havln_mj.tasks.instructions import generate_instructions, tokenize, word_count
+from havln_mj.tasks.phrases import TURNS
 from havln_mj.tasks.procedural import sample_paths, scene_crowd
+from havln_mj.tasks.route_facts import describe_route, room_name
 
 SCAN = "proc-0"
 
@@ -135,6 +131,58 @@ def test_generation_is_deterministic(scan, crowd, paths):
     b = generate_instructions(route, np.random.default_rng(5))
     assert a == b
     assert generate_instructions(route, np.random.default_rng(6)) != a
+
+
+# The wording of a fixed seed, pinned: the generator must keep writing exactly this.
+PINNED_DIGEST = "876d9ebc653749679404fcb215c5dbd9e858c3a681fbdc385d95859d43580171"
+PINNED_PATH_3 = (
+    "You are standing in the TV room near the TV stand. You are heading for the laundry room. "
+    "Bear right. The TV stand will be on your right. Take a right. From there, carry on and "
+    "head into the laundry room with the shelves on your left. Look for the TV stand to your "
+    "right. Your goal is beside the shelves in the laundry room, so stop there. That is where "
+    "the walk ends.",
+    "You are heading for the laundry room. You begin in the TV room, close to the TV stand. "
+    "Go slightly right and walk on. Then take a right. You should see the TV stand on your "
+    "right. Carry on and go through the doorway into the laundry room. In total you cover "
+    "around 5 metres. Wait by the shelves in the laundry room. Once you are there, you have "
+    "arrived.",
+)
+PINNED_PATH_0_PEOPLE = (
+    "You begin next to a person practising the guitar in the family room; move off "
+    "carefully. Off to the side in the living room, someone is stretching on a mat.",
+    "Right where you start, someone is practising the guitar in the family room. One person "
+    "stretching on a mat is close by in the living room, not in your way.",
+    "Right where you start, one person is practising the guitar in the family room. You may "
+    "notice someone stretching on a mat in the living room.",
+)
+PINNED_STAIRS = (
+    "Move ahead a short way. Next, climb the stairs. Take your time. It is a short walk of "
+    "about 8 metres. Stop there. That is where the walk ends.",
+    "Take your time. Head forward and walk ahead. Keep going straight and walk up the steps. "
+    "In total you cover around 8 metres. Wait at that spot. That is where the walk ends.",
+)
+PINNED_DOWN = (
+    "Turn all the way around and keep walking. Go down the stairs. Take your time. The whole "
+    "walk is roughly 8 metres. Wait at that spot. Once you are there, you have arrived.",
+)
+
+
+def test_wording_of_a_fixed_seed_is_pinned(scan, crowd, paths):
+    digest = hashlib.sha256()
+    for i, path in enumerate(paths):
+        route = describe_route(scan, path, 0.7 * i, crowd)
+        texts, people = generate_instructions(route, np.random.default_rng(i), 3)
+        digest.update("\n".join(texts + people).encode() + b"\n")
+    assert digest.hexdigest() == PINNED_DIGEST
+    route = describe_route(scan, paths[3], 0.0, crowd)
+    assert generate_instructions(route, np.random.default_rng(3), 2) == (PINNED_PATH_3, ("", ""))
+    route = describe_route(scan, paths[0], 0.0, crowd)
+    assert generate_instructions(route, np.random.default_rng(0), 3)[1] == PINNED_PATH_0_PEOPLE
+    toy = _stair_scan()
+    up = describe_route(toy, ["a", "b", "c", "d"], 0.0, Crowd([]))
+    assert generate_instructions(up, np.random.default_rng(1), 2) == (PINNED_STAIRS, ("", ""))
+    down = describe_route(toy, ["d", "c", "b", "a"], 0.0, Crowd([]))
+    assert generate_instructions(down, np.random.default_rng(2), 1) == (PINNED_DOWN, ("",))
 
 
 def test_lengths_near_ha_r2r(scan, crowd, paths):

@@ -450,7 +450,7 @@ def test_episode_from_ha_r2r(line: NavGraph) -> None:
 
 
 def test_episode_from_dataset_record(line: NavGraph) -> None:
-    # Records with attributes (like havln_mj.tasks.datasets.Episode) work as well as JSON.
+    # Records with attributes (like havln_mj.tasks.episodes.Episode) work as well as JSON.
     human = SimpleNamespace(viewpoint="e", rel_pos="End")
     rec = SimpleNamespace(scan="line", path=tuple(REF), path_id=9, humans=(human,))
     ep = EvalEpisode.from_ha_r2r(rec, REF, "9_0")

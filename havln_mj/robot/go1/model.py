@@ -161,6 +161,14 @@ def _add_camera(child: mujoco.MjSpec, camera_height: float | None) -> float:
     return float(camera_height)
 
 
+def _name_geoms(child: mujoco.MjSpec) -> None:
+    """Names every unnamed geom ``<body>/geom<k>`` (its index among its body's geoms)."""
+    for body in child.bodies:
+        for k, geom in enumerate(body.geoms):
+            if not geom.name:
+                geom.name = f"{body.name}/geom{k}"
+
+
 def add_go1(
     spec: mujoco.MjSpec,
     pos: Sequence[float] = (0.0, 0.0, 0.0),
@@ -205,6 +213,7 @@ def add_go1(
         child.delete(key)  # keyframes would not match the world's qpos size
     child.body(const.TRUNK).pos = (0.0, 0.0, const.HOME_TRUNK_Z)
     height = _add_camera(child, camera_height)
+    _name_geoms(child)
 
     spec.option.timestep = const.TIMESTEP
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC

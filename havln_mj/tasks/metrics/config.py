@@ -7,13 +7,14 @@ from dataclasses import dataclass
 from typing import Literal
 
 from havln_mj.errors import InvalidArgumentError
+from havln_mj.sim.crowd import COLLISION_DISTANCE
+from havln_mj.tasks.rewards import SUCCESS_DISTANCE  # R2R and HA-R2R: success when NE < 3 m
 
 CriticalMode = Literal["paper", "ha3d", "none"]
 CRITICAL_MODES: tuple[str, ...] = ("paper", "ha3d", "none")
 
-SUCCESS_DISTANCE = 3.0  # metres; R2R and HA-R2R: success when NE < 3 m (strict)
 DTW_THRESHOLD = 3.0  # metres; d_th of nDTW (Ilharco et al. 2019)
-COLLISION_RADIUS = 1.0  # metres; HA-VLN's collision threshold (HA3D: distance <= 1)
+COLLISION_RADIUS = COLLISION_DISTANCE  # metres; HA-VLN's threshold (HA3D: distance <= 1)
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ from scipy.spatial import ConvexHull
 
 from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
-from havln_mj.scene.navgrid import (
+from havln_mj.nav import (
     PERSON_BAND,
     GridSpec,
     NavGrid,

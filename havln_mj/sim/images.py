@@ -1,0 +1,65 @@
+"""Rendered views in the simulator's image formats (MatterSim's by default).
+
+MatterSim hands out BGR ``uint8`` colour and ``uint16`` depth in 0.25 mm units (planar
+z-distance, 0 = no reading, so anything beyond 16.38 m reads 0). Users who prefer RGB or
+``float32`` metres ask the simulator for them. States that are not rendered share read-only
+zero images.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from havln_mj.sim.frame import View
+
+DEPTH_UNITS_PER_M = 4000.0  # MatterSim / Matterport depth: 0.25 mm per unit
+_UINT16_MAX = 65535
+
+
+def depth_to_mattersim(depth_m: np.ndarray) -> np.ndarray:
+    """Metres to MatterSim's H×W×1 ``uint16`` in 0.25 mm units (out of range reads 0)."""
+    units = np.rint(depth_m * DEPTH_UNITS_PER_M)
+    units[units > _UINT16_MAX] = 0
+    return units.astype(np.uint16)[..., None]
+
+
+def to_bgr(rgb: np.ndarray) -> np.ndarray:
+    """An RGB ``uint8`` image as a new BGR one."""
+    import cv2  # only when rendering: OpenCV is a large import
+
+    return cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
+
+
+class ImageFormat:
+    """Turns views into state images, and makes the blank images of unrendered states.
+
+    Args:
+        color_order: ``"BGR"`` or ``"RGB"``.
+        depth_units: ``"mattersim"`` (``uint16``, 0.25 mm) or ``"metres"`` (``float32``).
+    """
+
+    def __init__(self, color_order: str, depth_units: str) -> None:
+        self.bgr = color_order == "BGR"
+        self.metres = depth_units == "metres"
+        self._blank: tuple[np.ndarray, np.ndarray] | None = None
+
+    def blank(self, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+        """Shared read-only zero colour and depth images of the given size."""
+        if self._blank is None or self._blank[0].shape[:2] != (height, width):
+            rgb = np.zeros((height, width, 3), np.uint8)
+            depth = np.zeros((height, width, 1), np.float32 if self.metres else np.uint16)
+            rgb.flags.writeable = depth.flags.writeable = False
+            self._blank = (rgb, depth)
+        return self._blank
+
+    def images(self, view: View) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """``(colour, depth, human mask)`` of a rendered view (blank depth when not rendered)."""
+        rgb = to_bgr(view.rgb) if self.bgr else view.rgb
+        if view.depth is None:
+            h, w = view.rgb.shape[:2]
+            depth = self.blank(w, h)[1]
+        elif self.metres:
+            depth = view.depth[..., None]
+        else:
+            depth = depth_to_mattersim(view.depth)
+        return rgb, depth, view.human_mask

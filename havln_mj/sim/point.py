@@ -1,0 +1,232 @@
+"""The point body: a kinematic camera rig on the navigation graph (MatterSim's agent).
+
+Every edge is a straight move between the two viewpoints' camera positions, in every mode
+(rendering on or off, bare graph or graph proxy), as in MatterSim: the move lasts its 3-D
+length at ``speed`` and the turn that follows the larger of the heading and elevation
+changes at ``turn_rate``; an action that neither moves nor turns is a wait. The body always
+arrives. Worlds for rendering are built per scan on first use (the building, its people and
+the rig) and kept in a least-recently-used cache.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+from collections.abc import Callable
+
+import mujoco
+import numpy as np
+
+from havln_mj.errors import InvalidActionError
+from havln_mj.frames import wrap_angle
+from havln_mj.robot.point_body import CAMERA, PointBody
+from havln_mj.scene.navgraph import NavGraph
+from havln_mj.scene.scan import Scan
+from havln_mj.sim.body import Film, Outcome, ignore
+from havln_mj.sim.crowd import Crowd
+from havln_mj.sim.frame import Frames, View, ViewSettings
+from havln_mj.sim.world import WorldOptions, build_world
+
+
+class Stage:
+    """A scan's rendering world: the building, its people and the point rig, with its frames.
+
+    For views from any camera pose: the point body's, and tools that look around a scan.
+    """
+
+    def __init__(self, scan: Scan, options: WorldOptions, crowd: Crowd) -> None:
+        self.world = build_world(scan, options, crowd.shapes, crowd.skins)
+        self.data = mujoco.MjData(self.world.model)
+        self.frames = Frames(self.world.model, crowd, options.people_style)
+        self.rig = PointBody(np.zeros(3))
+
+    def place(self, pose: tuple) -> None:
+        """Writes the rig's pose ``(position, heading, elevation)`` into the data."""
+        position, heading, elevation = pose
+        self.rig.set_pose(position, heading, elevation)
+        self.rig.write(self.world.model, self.data)
+
+    def render(
+        self, pose: tuple, settings: ViewSettings, t: float, camera: str | None = None
+    ) -> View:
+        """The view from the rig at ``pose`` (or from ``camera``) at simulated time ``t``."""
+        self.place(pose)
+        return self.frames.render(self.data, t, camera or CAMERA, settings)
+
+    def close(self) -> None:
+        """Releases the cameras' GL resources."""
+        self.frames.close()
+
+
+class PointKind:
+    """Makes point bodies; keeps their rendering worlds per scan.
+
+    Args:
+        scan: Loads a scan by id (for rendering).
+        world_options: How rendering worlds are built.
+        cache_size: How many rendering worlds are kept.
+        speed: Walking speed (m/s) for the clock.
+        turn_rate: Turning rate (rad/s) for the clock.
+    """
+
+    name = "point"
+    robot_actions = ()
+
+    def __init__(
+        self,
+        scan: Callable[[str], Scan],
+        world_options: WorldOptions,
+        cache_size: int,
+        speed: float,
+        turn_rate: float,
+    ) -> None:
+        self._scan = scan
+        self._options = world_options
+        self._cache_size = max(1, cache_size)
+        self.speed, self.turn_rate = speed, turn_rate
+        self._stages: OrderedDict[str, Stage] = OrderedDict()
+
+    def body(self, scan_id: str, graph: NavGraph, crowd: Crowd) -> GraphPointBody:
+        """A new point body on ``scan_id``."""
+        return GraphPointBody(self, scan_id, graph, crowd)
+
+    def prepare(self, scan_id: str, crowd: Crowd, rendering: bool) -> None:
+        """Builds the scan's rendering world ahead of use (nothing without rendering)."""
+        if rendering:
+            self.stage(scan_id, crowd)
+
+    def stage(self, scan_id: str, crowd: Crowd) -> Stage:
+        """The rendering world of ``scan_id`` (built on first use, least recently used out)."""
+        stage = self._stages.get(scan_id)
+        if stage is None:
+            stage = self._stages[scan_id] = Stage(self._scan(scan_id), self._options, crowd)
+            while len(self._stages) > self._cache_size:
+                _, old = self._stages.popitem(last=False)
+                old.close()
+        else:
+            self._stages.move_to_end(scan_id)
+        return stage
+
+    def close(self) -> None:
+        """Releases every world's renderer."""
+        for stage in self._stages.values():
+            stage.close()
+        self._stages.clear()
+
+
+class GraphPointBody:
+    """One element's point body: at a viewpoint's camera position, heading and elevation."""
+
+    __slots__ = (
+        "_drawn",
+        "_kind",
+        "crowd",
+        "elevation",
+        "graph",
+        "heading",
+        "observe",
+        "scan_id",
+        "viewpoint",
+        "xyz",
+    )
+
+    def __init__(self, kind: PointKind, scan_id: str, graph: NavGraph, crowd: Crowd) -> None:
+        self._kind = kind
+        self.scan_id, self.graph, self.crowd = scan_id, graph, crowd
+        self.viewpoint = ""
+        self.xyz = (0.0, 0.0, 0.0)
+        self.heading = self.elevation = 0.0
+        self._drawn: tuple | None = None
+        self.observe = ignore
+
+    def start(self, viewpoint: str, heading: float, elevation: float, t: float) -> Outcome:
+        """Places the rig at ``viewpoint`` (an instant)."""
+        self.viewpoint = viewpoint
+        self.xyz = tuple(float(c) for c in self.graph.position(viewpoint))
+        self.heading, self.elevation = heading, elevation
+        self._drawn = None
+        knots = ((t, *self.xyz),)
+        self.observe(knots)
+        return Outcome(0.0, knots, viewpoint, heading)
+
+    def move(
+        self,
+        target: str,
+        heading: float,
+        elevation: float,
+        t: float,
+        wait_s: float,
+        film: Film | None = None,
+    ) -> Outcome:
+        """Moves straight to ``target``, then turns to ``heading``/``elevation``."""
+        here = self.xyz
+        there = here if target == self.viewpoint else self._position(target)
+        move_s = math.dist(here, there) / self._kind.speed
+        turn = max(abs(wrap_angle(heading - self.heading)), abs(elevation - self.elevation))
+        duration = move_s + turn / self._kind.turn_rate
+        if duration == 0.0:
+            duration = wait_s
+        knots = [(t, *here)]
+        if move_s > 0.0:
+            knots.append((t + move_s, *there))
+        if duration > move_s:
+            knots.append((t + duration, *there))
+        self.observe(knots)  # people react to the move they see coming, frames included
+        if film is not None:
+            self._film(film, t, move_s, duration, here, there, heading, elevation)
+        self.viewpoint, self.xyz = target, there
+        self.heading, self.elevation = heading, elevation
+        self._drawn = None
+        return Outcome(duration, knots, target, heading)
+
+    def _position(self, vp: str) -> tuple[float, float, float]:
+        return tuple(float(c) for c in self.graph.position(vp))
+
+    def _film(self, film, t0, move_s, duration, here, there, heading, elevation) -> None:
+        """Draws the action's frames: along the move, then through the turn."""
+        h0, e0 = self.heading, self.elevation
+        dh = wrap_angle(heading - h0)
+        turn_s = duration - move_s
+        a, b = np.asarray(here), np.asarray(there)
+        for t in film.times(t0, t0 + duration):
+            s = t - t0
+            f = min(s / move_s, 1.0) if move_s > 0 else 1.0
+            g = min(max((s - move_s) / turn_s, 0.0), 1.0) if turn_s > 0 else 1.0
+            self._drawn = (a + f * (b - a), h0 + g * dh, e0 + g * (elevation - e0))
+            film.draw(t)
+
+    def robot_action(self, action: str, t: float, film: Film | None = None) -> Outcome:
+        """The point body has no robot actions.
+
+        Raises:
+            InvalidActionError: Always.
+        """
+        raise InvalidActionError(
+            f'robot action {action!r} needs Simulator(body="go1"); this one drives a point body'
+        )
+
+    def pose(self) -> tuple[float, float, float, float]:
+        """``(x, y, z, heading)`` of the camera (mid-action while filming: the drawn one)."""
+        if self._drawn is not None:
+            (x, y, z), heading, _ = self._drawn
+            return (float(x), float(y), float(z), float(heading))
+        return (*self.xyz, self.heading)
+
+    def goal_distance(self, goal: str) -> float:
+        """Geodesic distance on the graph from the current viewpoint."""
+        return self.graph.distance(self.viewpoint, goal)
+
+    def scene(self, elevation: float, t: float) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        """The scan's rendering world with the rig and the people at ``t``."""
+        stage = self._kind.stage(self.scan_id, self.crowd)
+        stage.place((np.asarray(self.xyz), self.heading, elevation))
+        stage.frames.pose(stage.data, t, CAMERA)
+        return stage.world.model, stage.data
+
+    def render(
+        self, settings: ViewSettings, elevation: float, t: float, camera: str | None = None
+    ) -> View:
+        """The rig camera's view at ``t`` (mid-action while filming)."""
+        pose = self._drawn or (np.asarray(self.xyz), self.heading, elevation)
+        stage = self._kind.stage(self.scan_id, self.crowd)
+        return stage.render(pose, settings, t, camera)
