@@ -10,12 +10,16 @@ import itertools
 import math
 from collections.abc import Callable
 
-from havln_mj.robot.go1.constants import FOOT_RADIUS
+from havln_mj.robot.go1 import constants as const
+from havln_mj.robot.go1.actuation import clip_joints
+from havln_mj.robot.go1.frames import rotation, to_body
 from havln_mj.robot.go1.gains import TerrainGains
+from havln_mj.robot.go1.kinematics import leg_ik
 
 Ground = Callable[[float, float], float]
 SAMPLE = 0.02  # metres between ground samples along a line
 PROFILE = 20  # a swing's height profile has PROFILE + 1 samples
+NEAR = tuple(-0.3 + 0.04 * k for k in range(24))  # ground that makes the trunk's rough (m)
 
 
 def _smooth(s: float) -> float:
@@ -98,7 +102,8 @@ def swing_heights(
     a = round(g.edge_margin / step)
     n = int(length / step) + 1
     tops = [
-        ground(x0 + ux * k * step, y0 + uy * k * step) + FOOT_RADIUS for k in range(-a, n + a + 1)
+        ground(x0 + ux * k * step, y0 + uy * k * step) + const.FOOT_RADIUS
+        for k in range(-a, n + a + 1)
     ]
     m0, m1 = g.swing_start, g.swing_end
     zs = []
@@ -131,3 +136,35 @@ def swing_height(zs: list[float], s: float) -> float:
     f = min(max(s, 0.0), 1.0) * PROFILE
     i = min(int(f), PROFILE - 1)
     return zs[i] + (zs[i + 1] - zs[i]) * (f - i)
+
+
+def standing_pose(
+    ground: Ground, x: float, y: float, yaw: float, top: float, g: TerrainGains
+) -> tuple[float, float, list[float]]:
+    """Trunk height, pitch and 12 joint angles standing at (x, y) with feet on the ground.
+
+    Each foot stands on a foothold under its hip, the trunk level with the line through them
+    at the standing height, so the robot can be placed on a stair or a ramp. ``top`` is the
+    trunk's height, used where the ground is unknown.
+    """
+    c, s = math.cos(yaw), math.sin(yaw)
+    feet = []
+    for leg in range(4):
+        hx, hy = const.HIP_OFFSETS[leg]
+        ry = hy + const.LEG_SIDE[leg] * const.ABDUCTION
+        fx, fy = foothold(ground, x + c * hx - s * ry, y + s * hx + c * ry, c, s, g)
+        fz = ground(fx, fy)
+        fz = fz if math.isfinite(fz) else top - g.flat_height
+        feet.append((fx, fy, fz + const.FOOT_RADIUS - g.touchdown_depth))
+    front = 0.5 * (feet[0][2] + feet[1][2])
+    rear = 0.5 * (feet[2][2] + feet[3][2])
+    pitch = -math.atan2(front - rear, 2.0 * const.HIP_X)
+    stand = g.rough_height if is_rough(ground, x, y, c, s, NEAR, g.edge_jump) else g.flat_height
+    z = 0.5 * (front + rear) - const.FOOT_RADIUS + g.touchdown_depth + stand
+    rot = rotation(0.0, pitch, yaw)
+    q: list[float] = []
+    for leg, f in enumerate(feet):
+        hx, hy = const.HIP_OFFSETS[leg]
+        b = to_body(rot, (f[0] - x, f[1] - y, f[2] - z))
+        q.extend(clip_joints(leg_ik(leg, b[0] - hx, b[1] - hy, b[2])))
+    return z, pitch, q

@@ -28,10 +28,12 @@ import math
 import mujoco
 
 from havln_mj.robot.go1 import constants as const
-from havln_mj.robot.go1.actuation import Tracker, clip_joints
+from havln_mj.robot.go1.actuation import Tracker
 from havln_mj.robot.go1.footholds import (
+    NEAR,
     foothold,
     is_rough,
+    standing_pose,
     swing_along,
     swing_height,
     swing_heights,
@@ -43,7 +45,6 @@ from havln_mj.robot.go1.kinematics import leg_fk, leg_ik
 
 TROT_OFFSETS = (0.0, 0.5, 0.5, 0.0)  # FR, FL, RR, RL phase offsets
 _WEIGHT = const.TOTAL_MASS * 9.81
-_NEAR = tuple(-0.3 + 0.04 * k for k in range(24))  # where rough ground changes rhythm (m)
 _FAR = tuple(0.5 + 0.04 * k for k in range(20))  # where it caps the speed (m ahead)
 
 
@@ -200,7 +201,7 @@ class TerrainGait:
         e = self.est
         c, s = math.cos(e.yaw), math.sin(e.yaw)
         jump = self.g.edge_jump
-        self.rough = is_rough(self.ground, e.x, e.y, c, s, _NEAR, jump)
+        self.rough = is_rough(self.ground, e.x, e.y, c, s, NEAR, jump)
         self.rough_ahead = self.rough or is_rough(self.ground, e.x, e.y, c, s, _FAR, jump)
 
     def _terrain_reference(self, dt: float) -> None:
@@ -231,37 +232,8 @@ class TerrainGait:
     def standing_pose(
         self, x: float, y: float, yaw: float, top: float
     ) -> tuple[float, float, list[float]]:
-        """Trunk height, pitch and 12 joint angles standing at (x, y) with feet on the ground.
-
-        Each foot stands on a foothold under its hip, the trunk level with the line through
-        them at the standing height, so the robot can be placed on a stair or a ramp.
-        """
-
-        def ground(px: float, py: float) -> float:
-            return self.ground(px, py, top)
-
-        c, s = math.cos(yaw), math.sin(yaw)
-        feet = []
-        for leg in range(4):
-            hx, hy = const.HIP_OFFSETS[leg]
-            ry = hy + const.LEG_SIDE[leg] * const.ABDUCTION
-            fx, fy = foothold(ground, x + c * hx - s * ry, y + s * hx + c * ry, c, s, self.g)
-            fz = ground(fx, fy)
-            fz = fz if math.isfinite(fz) else top - self.g.flat_height
-            feet.append((fx, fy, fz + const.FOOT_RADIUS - self.g.touchdown_depth))
-        front = 0.5 * (feet[0][2] + feet[1][2])
-        rear = 0.5 * (feet[2][2] + feet[3][2])
-        pitch = -math.atan2(front - rear, 2.0 * const.HIP_X)
-        rough = is_rough(ground, x, y, c, s, _NEAR, self.g.edge_jump)
-        stand = self.g.rough_height if rough else self.g.flat_height
-        z = 0.5 * (front + rear) - const.FOOT_RADIUS + self.g.touchdown_depth + stand
-        rot = rotation(0.0, pitch, yaw)
-        q: list[float] = []
-        for leg, f in enumerate(feet):
-            hx, hy = const.HIP_OFFSETS[leg]
-            b = to_body(rot, (f[0] - x, f[1] - y, f[2] - z))
-            q.extend(clip_joints(leg_ik(leg, b[0] - hx, b[1] - hy, b[2])))
-        return z, pitch, q
+        """:func:`~havln_mj.robot.go1.footholds.standing_pose` on this gait's ground."""
+        return standing_pose(lambda px, py: self.ground(px, py, top), x, y, yaw, top, self.g)
 
     # --------------------------------------------------------------- step
 
