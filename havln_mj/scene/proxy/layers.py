@@ -234,7 +234,9 @@ class Disc(NamedTuple):
 class Leg(NamedTuple):
     """A straight walk's free floor: a corridor from ``a`` (floor ``fa``) to ``b`` (``fb``).
 
-    The corridor is ``corridor_half_width`` wide on each side; its height is interpolated.
+    The corridor is ``corridor_half_width`` wide on each side; its height is interpolated,
+    and where it climbs as a stair cut into treads and risers when ``stepped`` (see
+    :func:`stair_steps`).
     """
 
     a: np.ndarray
@@ -242,6 +244,7 @@ class Leg(NamedTuple):
     fa: float
     fb: float
     comp: int
+    stepped: bool = False
 
 
 def graph_elements(
@@ -277,23 +280,12 @@ def rasterise(discs: list[Disc], legs: list[Leg], grid: Grid, p: ProxyParams) ->
         mask, height = d <= p.viewpoint_radius, np.full(d.shape, f)
         reach = p.viewpoint_radius
         _place(layers, grid.shape, window, mask, height, d, cheb, reach, comp, None, p)
-    for pa, pb, fa, fb, comp in sorted(legs, key=lambda g: min(g.fa, g.fb)):
+    for pa, pb, fa, fb, comp, stepped in sorted(legs, key=lambda g: min(g.fa, g.fb)):
         window, d, cheb, t = corridor(grid, pa, pb, p.corridor_half_width)
         mask, height = d <= p.corridor_half_width, fa + t * (fb - fa)
         reach = p.corridor_half_width
-        _place(
-            layers,
-            grid.shape,
-            window,
-            mask,
-            height,
-            d,
-            cheb,
-            reach,
-            comp,
-            stair_steps(fa, fb, p),
-            p,
-        )
+        steps = stair_steps(fa, fb, p) if stepped else None
+        _place(layers, grid.shape, window, mask, height, d, cheb, reach, comp, steps, p)
     return layers
 
 
