@@ -293,6 +293,7 @@ def _stairs(data: Path, scan_id: str, edges: int, seed: int, flights: bool = Fal
     picks = [climbs[int(k)] for k in rng.permutation(len(climbs))[:edges]]
     world = LeggedWorld(scan, WorldOptions(collision="boxes"), NO_CROWD, LeggedOptions())
     agent = LeggedAgent(world)
+    agent.body = Go1Body(world.model, agent.data, "go1/", gains=GAINS[0], controller=CONTROLLER[0])
     rows = []
     for a, b in picks:
         for src, dst in ((a, b), (b, a)):
