@@ -35,6 +35,8 @@ import mujoco
 import numpy as np
 from common import machine
 
+_LEDGE = 0.08  # metres: a smaller rise is a ledge, not a stair's riser
+
 
 def main() -> int:
     default = Path(
@@ -93,9 +95,11 @@ def main() -> int:
                 continue  # walked through other viewpoints: their edges count
             if (a, b) in proxy.unwalkable:
                 continue
-            r, t = stair_steps(route_floor_points(graph, via or (a, b)), proxy.boxes, params)
+            path = route_floor_points(graph, via or (a, b))
+            r, _ = stair_steps(path, proxy.boxes, params)
+            big, t = stair_steps(path, proxy.boxes, params, least=_LEDGE)
             stairs += 1
-            cut += len(r) > 0
+            cut += len(big) > 0
             risers += np.abs(r).tolist()
             treads += t.tolist()
         stair_rows.append((stairs, cut, risers, treads))
@@ -158,13 +162,18 @@ def main() -> int:
 
 
 def _stair_stats(stair_rows: list) -> dict:
-    """Stair edges cut into treads and risers (else left ramps), and their proportions."""
+    """Stair edges cut into treads and risers (else left ramps), and their proportions.
+
+    Rises and drops of 3 cm or more count; treads run between those of ``_LEDGE`` or more
+    (smaller ledges are where a stair's floor blends into others around it).
+    """
     risers = np.array([x for _, _, r, _ in stair_rows for x in r])
     treads = np.array([x for _, _, _, t in stair_rows for x in t])
     return {
         "stair_edges": sum(s for s, _, _, _ in stair_rows),
         "cut_into_treads": sum(c for _, c, _, _ in stair_rows),
-        "risers": len(risers),
+        "risers_and_ledges": len(risers),
+        "ledges_under_ledge_m": int(np.sum(risers < _LEDGE)),
         "riser_max_m": round(float(risers.max()), 3) if len(risers) else None,
         "risers_over_0.19": int(np.sum(risers > 0.19 + 1e-9)),
         "tread_p5_m": round(float(np.percentile(treads, 5)), 3) if len(treads) else None,

@@ -123,12 +123,16 @@ def _support(pts: np.ndarray, boxes: BoxSet, p: ProxyParams):
 
 
 def stair_steps(
-    points: np.ndarray, boxes: BoxSet, p: ProxyParams, spacing: float = 0.01
+    points: np.ndarray,
+    boxes: BoxSet,
+    p: ProxyParams,
+    spacing: float = 0.01,
+    least: float = 0.03,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The risers and treads a path crosses: its support sampled every ``spacing``.
 
-    A riser is a rise or drop of more than 3 cm between neighbouring samples (heights in
-    metres, signed along the path); a tread is the run between two risers (the flat runs
+    A riser is a rise or drop of more than ``least`` between neighbouring samples (heights
+    in metres, signed along the path); a tread is the run between two risers (the flat runs
     before the first and after the last are landings, not treads).
 
     Returns:
@@ -138,7 +142,7 @@ def stair_steps(
     support, _, _ = _support(pts, boxes, p)
     if support is None:
         return np.zeros(0), np.zeros(0)
-    at = np.flatnonzero(np.abs(np.diff(support)) > 0.03)
+    at = np.flatnonzero(np.abs(np.diff(support)) > least)
     if not len(at):
         return np.zeros(0), np.zeros(0)
     # A riser split between neighbouring samples counts once.
