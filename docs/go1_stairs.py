@@ -28,6 +28,7 @@ HERE = Path(__file__).resolve().parent
 
 
 def main() -> None:
+    """Walks the edge and writes the video and the strip of frames."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=HERE.parents[1] / "shared" / "data")
     ap.add_argument("--scan", default="17DRP5sb8fy")
