@@ -31,7 +31,7 @@ import mujoco
 import numpy as np
 from common import machine
 
-from havln_mj.robot.go1 import Go1Body, add_go1
+from havln_mj.robot.go1 import Go1Body, Go1Gains, add_go1, load_gains
 from havln_mj.robot.go1.courses import START_X, ramp_spec, stairs_spec
 
 STAIRS = (0.15, 0.17, 0.19)
@@ -39,12 +39,14 @@ RAMPS = (10.0, 20.0, 30.0)
 REACHED = 0.3  # metres from the target that count as arrived
 
 
-def _course(kind: str, size: float, down: bool, walks: int, seed: int, controller: str) -> dict:
+def _course(
+    kind: str, size: float, down: bool, walks: int, seed: int, controller: str, gains: Go1Gains
+) -> dict:
     spec, course = stairs_spec(riser=size) if kind == "stairs" else ramp_spec(size)
     add_go1(spec)
     model = spec.compile()
     data = mujoco.MjData(model)
-    robot = Go1Body(model, data, controller=controller)
+    robot = Go1Body(model, data, gains=gains, controller=controller)
     rng = np.random.default_rng(seed)
     start_x, goal_x = (course.top_x, START_X) if down else (START_X, course.top_x)
     start_z, goal_z = (course.rise, 0.0) if down else (0.0, course.rise)
@@ -170,6 +172,7 @@ def main() -> None:
     parser.add_argument("--parts", default="courses,proxy")
     parser.add_argument("--controller", default="terrain", choices=("terrain", "trot"))
     parser.add_argument("--proxy-edges", type=int, default=0, help="0: every stair edge")
+    parser.add_argument("--gains", type=Path, default=None, help="gains.json to use")
     parser.add_argument(
         "--data",
         type=Path,
@@ -181,12 +184,13 @@ def main() -> None:
     )
     args = parser.parse_args()
     parts = set(args.parts.split(","))
-    out: dict = {"machine": machine(), "controller": args.controller}
+    gains = load_gains(args.gains)
+    out: dict = {"machine": machine(), "controller": args.controller, "gains": str(args.gains)}
     t = time.perf_counter()
     if "courses" in parts:
         cells = [("stairs", r) for r in STAIRS] + [("ramp", a) for a in RAMPS]
         out["courses"] = [
-            _course(kind, size, down, args.walks, args.seed + k, args.controller)
+            _course(kind, size, down, args.walks, args.seed + k, args.controller, gains)
             for k, (kind, size) in enumerate(cells)
             for down in (False, True)
         ]

@@ -155,6 +155,8 @@ def test_controller_and_terrain_gains_are_checked(tmp_path: Path) -> None:
         TerrainGains(rough_duty=0.95)
     with pytest.raises(InvalidArgumentError, match="swing_start"):
         TerrainGains(swing_start=0.9)
+    with pytest.raises(InvalidArgumentError, match="control_decimation"):
+        TerrainGains(control_decimation=0)
     path = tmp_path / "gains.json"
     path.write_text(json.dumps({"terrain": {"rough_speed": 0.1}}))
     assert load_gains(path).terrain.rough_speed == 0.1

@@ -59,6 +59,7 @@ class TerrainGains:
         swing_rate: Most height a swing foot changes per unit of swing phase (m).
         accel: Most the commanded speed changes (m/s²).
         scan_period: Time between looks at the ground ahead (s).
+        control_decimation: Physics steps per update of this gait.
     """
 
     flat_period: float = 0.4
@@ -92,9 +93,14 @@ class TerrainGains:
     swing_rate: float = 1.2
     accel: float = 1.0
     scan_period: float = 0.04
+    control_decimation: int = 2
 
     def __post_init__(self) -> None:
         _check_numbers(self)
+        if not (isinstance(self.control_decimation, int) and self.control_decimation >= 1):
+            raise InvalidArgumentError(
+                f"control_decimation must be an integer >= 1, got {self.control_decimation!r}"
+            )
         for name, lo, hi in (
             ("flat_duty", 0.4, 0.8),
             ("rough_duty", 0.4, 0.8),

@@ -352,7 +352,7 @@ class Go1Body:
         if self.fallen or self.is_fallen():
             self.fallen = True
             return self._result(kind, target, truth0, est0, t0, steps, False)
-        n = g.control_decimation
+        n = g.terrain.control_decimation if self.terrain else g.control_decimation
         dt = n * m.opt.timestep
         alpha = min(1.0, dt / g.velocity_filter) if g.velocity_filter > 0 else 1.0
         self._ix = self._iy = self._iw = 0.0
