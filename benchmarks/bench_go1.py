@@ -10,8 +10,12 @@
 * **Speed**: controller time per 2 ms physics step (primitive wall time minus bare
   ``mj_step`` time for the same steps), and the real-time factor of the robot walking in the
   procedural house ``proc-0`` (collision boxes) with 4 mocap capsule "people" moved every tick.
+* **Cruise**: walking speed over the middle 1.5 m of 3 m forward primitives.
 * **Stairs**: climbing edges of a real building's graph proxy (``--stairs-scan``), walked both
   ways; with ``--stairs-flights`` the edges walked along a flight drawn for them.
+
+``--controller`` picks the gait (``trot`` or ``terrain``, see ``Go1Body``) for every part and
+``--v-max`` the primitives' cruise cap. Stairs and ramp courses: ``bench_go1_terrain.py``.
 
 Prints one JSON object. Run: ``python benchmarks/bench_go1.py [--primitives N]``.
 """
@@ -31,7 +35,7 @@ import mujoco
 import numpy as np
 from common import machine
 
-from havln_mj.robot.go1 import Go1Body, add_go1, flat_floor_spec
+from havln_mj.robot.go1 import Go1Body, Go1Gains, add_go1, flat_floor_spec, load_gains
 
 EPISODE = 10
 TURN = math.pi / 4
@@ -50,12 +54,45 @@ def _stats(values: list[float], scale: float = 1.0, digits: int = 4) -> dict:
     }
 
 
+CONTROLLER = ["trot"]  # the controller every part drives (--controller)
+GAINS: list[Go1Gains] = []  # the gains every part uses (--v-max changes the cruise cap)
+
+
 def _flat_robot(estimate: str) -> tuple[mujoco.MjModel, mujoco.MjData, Go1Body]:
     spec = flat_floor_spec()
     add_go1(spec)
     model = spec.compile()
     data = mujoco.MjData(model)
-    return model, data, Go1Body(model, data, estimate=estimate)
+    robot = Go1Body(model, data, estimate=estimate, gains=GAINS[0], controller=CONTROLLER[0])
+    return model, data, robot
+
+
+def _cruise(walks: int, seed: int) -> dict:
+    """Walking speed over the middle 1.5 m of 3 m forward primitives on a flat floor."""
+    _, _, robot = _flat_robot("truth")
+    rng = np.random.default_rng(seed)
+    speeds, errors = [], []
+    for _ in range(walks):
+        robot.reset(0.0, 0.0, 0.0, float(rng.uniform(0, 2 * math.pi)), settle=0.3)
+        p0 = robot.true_pose()
+        track: list[tuple[float, float]] = []
+
+        def tick(t: float, p0=p0, track=track) -> None:
+            p = robot.true_pose()
+            track.append((t, math.hypot(p.x - p0.x, p.y - p0.y)))
+
+        res = robot.forward(3.0, on_tick=tick)
+        tr = np.array(track)
+        mid = (tr[:, 1] > 0.75) & (tr[:, 1] < 2.25)
+        if not res.fell and mid.sum() > 3:
+            speeds.append(float(np.polyfit(tr[mid, 0], tr[mid, 1], 1)[0]))
+            errors.append(res.error)
+    return {
+        "walks": walks,
+        "cruise_m_per_s": _stats(speeds, digits=3),
+        "distance_error_3m_m": _stats(errors),
+        "forward_v_max": GAINS[0].forward_v_max,
+    }
 
 
 def _run_flat(n: int, estimate: str, push: bool, seed: int) -> dict:
@@ -202,6 +239,7 @@ def _house(seconds: float, seed: int, physical: bool) -> dict:
         scan, WorldOptions(collision="boxes"), crowd, LeggedOptions(physical_humans=physical)
     )
     agent = LeggedAgent(world)
+    agent.body = Go1Body(world.model, agent.data, "go1/", gains=GAINS[0], controller=CONTROLLER[0])
     vp = g.nodes[int(rng.integers(g.num_nodes))]
     agent.place(g.position(vp), g.floor_z(vp), float(rng.uniform(0, 2 * math.pi)), 0.0)
     clock, wall, actions, falls, hits = 0.0, time.perf_counter(), 0, 0, 0
@@ -255,6 +293,7 @@ def _stairs(data: Path, scan_id: str, edges: int, seed: int, flights: bool = Fal
     picks = [climbs[int(k)] for k in rng.permutation(len(climbs))[:edges]]
     world = LeggedWorld(scan, WorldOptions(collision="boxes"), NO_CROWD, LeggedOptions())
     agent = LeggedAgent(world)
+    agent.body = Go1Body(world.model, agent.data, "go1/", gains=GAINS[0], controller=CONTROLLER[0])
     rows = []
     for a, b in picks:
         for src, dst in ((a, b), (b, a)):
@@ -297,7 +336,9 @@ def main() -> None:
     parser.add_argument("--odometry-primitives", type=int, default=None)
     parser.add_argument("--house-seconds", type=float, default=60.0)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--parts", default="flat,push,odometry,speed,house,stairs")
+    parser.add_argument("--parts", default="flat,push,odometry,speed,cruise,house,stairs")
+    parser.add_argument("--controller", default="trot", choices=("trot", "terrain"))
+    parser.add_argument("--v-max", type=float, default=None, help="forward cruise cap (m/s)")
     parser.add_argument(
         "--data",
         type=Path,
@@ -315,7 +356,10 @@ def main() -> None:
     args = parser.parse_args()
     parts = set(args.parts.split(","))
     n_odo = args.odometry_primitives or max(10, args.primitives // 5)
-    out: dict = {"machine": machine()}
+    CONTROLLER[0] = args.controller
+    gains = load_gains()
+    GAINS.append(gains.with_(forward_v_max=args.v_max) if args.v_max else gains)
+    out: dict = {"machine": machine(), "controller": args.controller}
     t = time.perf_counter()
     if "flat" in parts:
         out["flat_truth"] = _run_flat(args.primitives, "truth", False, args.seed)
@@ -325,6 +369,8 @@ def main() -> None:
         out["flat_odometry"] = _run_flat(n_odo, "odometry", False, args.seed + 2)
     if "speed" in parts:
         out["controller_time"] = _controller_time(args.seed + 3)
+    if "cruise" in parts:
+        out["flat_cruise"] = _cruise(10, args.seed + 6)
     if "house" in parts:
         out["house_4_people"] = [
             _house(args.house_seconds, args.seed + 4, physical) for physical in (False, True)

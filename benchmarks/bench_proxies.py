@@ -6,6 +6,9 @@ Prints one JSON object:
   straight, walked by a route (``by_flight`` of them along a flight drawn for the edge), and
   unwalkable (by cause; ``crossing`` marks edges whose straight corridor provably cannot
   coexist with a drawn edge's);
+* stairs: the edges climbing more than ``stair_rise`` walked straight or along a flight, how
+  many are cut into treads and risers (the rest stay ramps), the risers and treads their
+  walks cross (``walk.stair_steps``);
 * totals, with the unwalkable edges by cause and by proof: ``steep`` edges climb more than
   ``max_grade`` end to end (no straight walk exists whatever is drawn), ``crossing`` ones
   cannot be drawn straight beside another edge, the rest are faults of the drawing;
@@ -32,6 +35,8 @@ import mujoco
 import numpy as np
 from common import machine
 
+_LEDGE = 0.08  # metres: a smaller rise is a ledge, not a stair's riser
+
 
 def main() -> int:
     default = Path(
@@ -56,11 +61,13 @@ def main() -> int:
 
     from havln_mj.scene.navgraph import NavGraph
     from havln_mj.scene.proxy.build import ProxyParams, build_proxy
-    from havln_mj.scene.proxy.walk import edge_grade
+    from havln_mj.scene.proxy.routes import route_floor_points
+    from havln_mj.scene.proxy.walk import edge_grade, stair_steps
 
     params = ProxyParams()
     scans = args.scans or (conn / "scans.txt").read_text().split()
     rows, largest = [], None
+    stair_rows: list = []
     causes: Counter = Counter()
     for scan in scans:
         graph = NavGraph.from_file(conn / f"{scan}_connectivity.json")
@@ -78,6 +85,24 @@ def main() -> int:
                 proof = "drawing"
             unwalkable[f"{proof}:{proxy.faults[(a, b)]}"] += 1
         causes.update(unwalkable)
+        # Stairs: edges climbing more than stair_rise, walked straight or along a flight.
+        risers, treads, stairs, cut = [], [], 0, 0
+        for a, b, _ in graph.edges():
+            if abs(graph.floor_z(a) - graph.floor_z(b)) <= params.stair_rise:
+                continue
+            via = proxy.routes.get((a, b))
+            if via is not None and all(isinstance(s, str) for s in via):
+                continue  # walked through other viewpoints: their edges count
+            if (a, b) in proxy.unwalkable:
+                continue
+            path = route_floor_points(graph, via or (a, b))
+            r, _ = stair_steps(path, proxy.boxes, params)
+            big, t = stair_steps(path, proxy.boxes, params, least=_LEDGE)
+            stairs += 1
+            cut += len(big) > 0
+            risers += np.abs(r).tolist()
+            treads += t.tolist()
+        stair_rows.append((stairs, cut, risers, treads))
         rows.append(
             {
                 "scan": scan,
@@ -117,6 +142,7 @@ def main() -> int:
                 "unwalkable_fraction": round(bad / total_edges, 4),
                 "unwalkable_by_cause": dict(sorted(causes.items())),
                 "scans_with_unwalkable": sum(r["unwalkable_edges"] > 0 for r in rows),
+                "stairs": _stair_stats(stair_rows),
                 "build_s": {
                     "mean": round(float(np.mean([r["build_s"] for r in rows])), 3),
                     "max": max(r["build_s"] for r in rows),
@@ -133,6 +159,27 @@ def main() -> int:
         )
     )
     return 0
+
+
+def _stair_stats(stair_rows: list) -> dict:
+    """Stair edges cut into treads and risers (else left ramps), and their proportions.
+
+    Rises and drops of 3 cm or more count; treads run between those of ``_LEDGE`` or more
+    (smaller ledges are where a stair's floor blends into others around it).
+    """
+    risers = np.array([x for _, _, r, _ in stair_rows for x in r])
+    treads = np.array([x for _, _, _, t in stair_rows for x in t])
+    return {
+        "stair_edges": sum(s for s, _, _, _ in stair_rows),
+        "cut_into_treads": sum(c for _, c, _, _ in stair_rows),
+        "risers_and_ledges": len(risers),
+        "ledges_under_ledge_m": int(np.sum(risers < _LEDGE)),
+        "riser_max_m": round(float(risers.max()), 3) if len(risers) else None,
+        "risers_over_0.19": int(np.sum(risers > 0.19 + 1e-9)),
+        "tread_p5_m": round(float(np.percentile(treads, 5)), 3) if len(treads) else None,
+        "tread_median_m": round(float(np.median(treads)), 3) if len(treads) else None,
+        "treads_under_0.25": round(float(np.mean(treads < 0.25)), 3) if len(treads) else None,
+    }
 
 
 def _timers(data: mujoco.MjData) -> dict:

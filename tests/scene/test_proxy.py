@@ -26,7 +26,7 @@ from havln_mj.scene.proxy.routes import (
     write_routes,
 )
 from havln_mj.scene.proxy.stairs import candidate_flights
-from havln_mj.scene.proxy.walk import CAUSES, edge_grade, path_fault
+from havln_mj.scene.proxy.walk import CAUSES, edge_grade, path_fault, stair_steps
 
 # Small and large, single- and multi-storey, scans whose graphs have several components, and
 # a four-storey stairwell with landings at every height (yqstnuAEVhm).
@@ -210,6 +210,27 @@ def test_a_walk_over_a_viewpoint_on_a_stair_moves_out_of_its_way():
     assert edge_walkability(g, proxy.boxes) == {
         cause: [e for e, c in proxy.faults.items() if c == cause] for cause in CAUSES
     }
+
+
+@pytest.mark.parametrize(
+    ("rise", "run", "degrees"),
+    [(1.0, 2.5, 0.0), (1.5, 2.5, 20.0), (2.4, 4.0, 45.0), (-1.2, 3.0, 90.0)],
+)
+def test_a_stair_edge_is_drawn_with_treads_and_risers(rise, run, degrees):
+    # A straight edge climbing more than stair_rise gets equal risers no higher than riser
+    # (after 2 cm floor rounding) on treads run / risers long, give or take the 10 cm cells
+    # the plan is drawn on.
+    a = np.radians(degrees)
+    g = _graph({"a": (0, 0, 0), "b": (run * np.cos(a), run * np.sin(a), rise), "c": (-2, 0, 0)},
+               [("a", "b"), ("a", "c")])  # fmt: skip
+    proxy = build_proxy(g)
+    assert proxy.faults == {} and proxy.unwalkable == []
+    ab = next((u, v) for u, v, _ in g.edges() if {u, v} == {"a", "b"})
+    risers, treads = stair_steps(route_floor_points(g, ab), proxy.boxes, P)
+    n = int(np.ceil(abs(rise) / P.riser))
+    assert len(risers) == n and np.all(np.sign(risers) == np.sign(rise))
+    assert np.abs(risers).max() <= P.riser + 1e-9
+    assert np.all(np.abs(treads - run / n) <= 1.5 * P.cell)
 
 
 def test_candidate_flights_join_the_ends_and_climb_gently_shortest_first():

@@ -1,14 +1,123 @@
-"""Controller gains of the GO1 trot and primitives, loaded from ``robots/go1/gains.json``."""
+"""Controller gains of the GO1 gaits and primitives, loaded from ``robots/go1/gains.json``."""
 
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 
 from havln_mj.errors import InvalidArgumentError, MalformedDataError
 from havln_mj.paths import asset_path
+
+
+def _check_numbers(obj) -> None:
+    for f in fields(obj):
+        value = getattr(obj, f.name)
+        if f.name == "terrain":
+            continue
+        if not (isinstance(value, int | float) and math.isfinite(value)) or (
+            value < 0 and f.name != "foot_x_offset"
+        ):
+            raise InvalidArgumentError(f"gain {f.name} must be a finite number >= 0, got {value!r}")
+
+
+@dataclass(frozen=True)
+class TerrainGains:
+    """Gains of the terrain-aware gait (:mod:`havln_mj.robot.go1.terrain_gait`; SI units).
+
+    Attributes:
+        flat_period: Trot cycle on even ground (s).
+        flat_duty: Stance fraction of that cycle.
+        flat_height: Trunk height above the feet on even ground (m).
+        rough_period: Trot cycle on rough ground (an edge or a climb in the scan ahead).
+        rough_duty: Its stance fraction (above 0.5: both diagonal pairs down for a while).
+        rough_speed: Speed cap on rough ground and while it lies ahead (m/s).
+        rough_height: Trunk height above the feet on rough ground (m).
+        clearance: Swing foot above the highest ground it passes over (m).
+        min_lift: Swing foot above its lift-off and touch-down points (m).
+        touchdown_depth: How far below the ground a swing foot aims (m).
+        raibert_gain: Foot placement gain on velocity error (s).
+        ref_leak: Rate at which the trunk reference decays toward the estimate (1/s).
+        max_lead: Farthest the trunk reference runs ahead of the estimate (m).
+        max_yaw_lead: Same for yaw (rad).
+        edge_margin: A foothold keeps this far from a riser beside it (m).
+        drop_margin: A foothold keeps this far from a drop beside it (m).
+        edge_jump: A height step this big between 2 cm samples is an edge (m).
+        foothold_shift: Farthest a foothold moves off its Raibert point (m).
+        tread_max: Flat pieces shorter than this are stepped on in their middle (m).
+        obstacle_rise: Ground this far above the line the feet stand on is an obstacle
+            (furniture, a wall), not a step (m).
+        terrain_filter: Time constant of the trunk height and pitch references (s).
+        ki_height: Integral gain on the trunk height error (1/s).
+        ki_pitch: Integral gain on the pitch error (1/s).
+        ki_roll: Integral gain on the roll error (1/s).
+        land_band: A swing foot touching lower than this above its goal has landed (m).
+        lock_phase: Swing phase after which the foothold no longer moves.
+        swing_start: Swing phase at which the foot starts moving horizontally.
+        swing_end: Swing phase at which it is over its foothold (then it comes down).
+        swing_rate: Most height a swing foot changes per unit of swing phase (m).
+        accel: Most the commanded speed changes (m/s²).
+        scan_period: Time between looks at the ground ahead (s).
+        control_decimation: Physics steps per update of this gait.
+    """
+
+    flat_period: float = 0.4
+    flat_duty: float = 0.5
+    flat_height: float = 0.27
+    rough_period: float = 0.6
+    rough_duty: float = 0.65
+    rough_speed: float = 0.15
+    rough_height: float = 0.28
+    clearance: float = 0.06
+    min_lift: float = 0.06
+    touchdown_depth: float = 0.01
+    raibert_gain: float = 0.05
+    ref_leak: float = 5.0
+    max_lead: float = 0.05
+    max_yaw_lead: float = 0.1
+    edge_margin: float = 0.06
+    drop_margin: float = 0.1
+    edge_jump: float = 0.025
+    foothold_shift: float = 0.16
+    tread_max: float = 0.45
+    obstacle_rise: float = 0.25
+    terrain_filter: float = 0.1
+    ki_height: float = 2.0
+    ki_pitch: float = 2.0
+    ki_roll: float = 2.0
+    land_band: float = 0.03
+    lock_phase: float = 0.3
+    swing_start: float = 0.15
+    swing_end: float = 0.8
+    swing_rate: float = 1.2
+    accel: float = 1.0
+    scan_period: float = 0.04
+    control_decimation: int = 2
+
+    def __post_init__(self) -> None:
+        _check_numbers(self)
+        if not (isinstance(self.control_decimation, int) and self.control_decimation >= 1):
+            raise InvalidArgumentError(
+                f"control_decimation must be an integer >= 1, got {self.control_decimation!r}"
+            )
+        for name, lo, hi in (
+            ("flat_duty", 0.4, 0.8),
+            ("rough_duty", 0.4, 0.8),
+            ("flat_period", 0.2, 2.0),
+            ("rough_period", 0.2, 2.0),
+        ):
+            value = getattr(self, name)
+            if not lo <= value <= hi:
+                raise InvalidArgumentError(f"{name} must be in [{lo}, {hi}], got {value}")
+        if not 0.0 < self.swing_start < self.swing_end < 1.0:
+            raise InvalidArgumentError(
+                f"need 0 < swing_start < swing_end < 1, got {self.swing_start}, {self.swing_end}"
+            )
+
+    def with_(self, **changes: float) -> TerrainGains:
+        """A copy with some gains changed."""
+        return replace(self, **changes)
 
 
 @dataclass(frozen=True)
@@ -24,13 +133,15 @@ class Go1Gains:
         foot_x_offset: Nominal feet shift forward of the hips (m); trims the trot's drift.
         raibert_gain: Foot placement gain on velocity error (s), for balance.
         ki_velocity: Integral gain of the linear velocity loop (1/s).
-        ki_yaw_rate: Integral gain of the yaw-rate loop (1/s); 0 by default, as its wind-up
+        ki_yaw_rate: Integral gain of the yaw-rate loop (1/s); above about 1 its wind-up
             made turns overshoot and spring back by up to 5°.
         integral_limit_velocity: Clip of the velocity integral (m/s).
         integral_limit_yaw_rate: Clip of the yaw-rate integral (rad/s).
         velocity_filter: Time constant of the measured-velocity low-pass (s).
         forward_kp: P gain on remaining distance (1/s).
         forward_v_max: Cruise speed cap (m/s).
+        odometry_v_max: Cruise speed cap closed on odometry (m/s): the feet slip more at
+            speed, and dead reckoning drifts with them.
         forward_v_min: Speed floor while the target is not reached (m/s).
         forward_k_lateral: Lateral offset hold gain (1/s).
         forward_k_yaw: Heading hold gain while walking (1/s).
@@ -45,6 +156,7 @@ class Go1Gains:
         settle: Standing time after the feet are back home (s).
         control_decimation: Physics steps per controller update (1 = 500 Hz control).
         tick_period: Physics time between ``on_tick`` calls (s); at most 1/16.
+        terrain: Gains of the terrain-aware gait.
     """
 
     period: float = 0.4
@@ -60,7 +172,8 @@ class Go1Gains:
     integral_limit_yaw_rate: float = 0.6
     velocity_filter: float = 0.05
     forward_kp: float = 2.5
-    forward_v_max: float = 0.5
+    forward_v_max: float = 0.7
+    odometry_v_max: float = 0.5
     forward_v_min: float = 0.1
     forward_k_lateral: float = 1.0
     forward_k_yaw: float = 2.0
@@ -75,16 +188,10 @@ class Go1Gains:
     settle: float = 0.2
     control_decimation: int = 1
     tick_period: float = 0.05
+    terrain: TerrainGains = field(default_factory=TerrainGains)
 
     def __post_init__(self) -> None:
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if not (isinstance(value, int | float) and math.isfinite(value)) or (
-                value < 0 and f.name != "foot_x_offset"
-            ):
-                raise InvalidArgumentError(
-                    f"gain {f.name} must be a finite number >= 0, got {value!r}"
-                )
+        _check_numbers(self)
         if not 0.2 <= self.duty <= 0.8:
             raise InvalidArgumentError(f"duty must be in [0.2, 0.8], got {self.duty}")
         if not 0.1 <= self.period <= 2.0:
@@ -103,7 +210,7 @@ class Go1Gains:
                 f"got {self.tick_period}"
             )
 
-    def with_(self, **changes: float) -> Go1Gains:
+    def with_(self, **changes) -> Go1Gains:
         """A copy with some gains changed."""
         return replace(self, **changes)
 
@@ -111,7 +218,8 @@ class Go1Gains:
 def load_gains(path: str | Path | None = None) -> Go1Gains:
     """Reads gains from a JSON object of ``Go1Gains`` fields (default: the shipped file).
 
-    Keys starting with ``_`` are comments. Missing keys keep their defaults.
+    Keys starting with ``_`` are comments. Missing keys keep their defaults. The object under
+    ``"terrain"`` holds :class:`TerrainGains`.
 
     Raises:
         MalformedDataError: Unknown keys or not a JSON object.
@@ -123,9 +231,17 @@ def load_gains(path: str | Path | None = None) -> Go1Gains:
         raise MalformedDataError(f"{path} is not valid JSON: {err}") from err
     if not isinstance(raw, dict):
         raise MalformedDataError(f"{path} must hold a JSON object of gains")
-    names = {f.name for f in fields(Go1Gains)}
+    values = _known(raw, Go1Gains, path)
+    terrain = values.pop("terrain", {})
+    if not isinstance(terrain, dict):
+        raise MalformedDataError(f"{path}: 'terrain' must be a JSON object of terrain gains")
+    return Go1Gains(**values, terrain=TerrainGains(**_known(terrain, TerrainGains, path)))
+
+
+def _known(raw: dict, cls: type, path: Path) -> dict:
+    names = {f.name for f in fields(cls)}
     values = {k: v for k, v in raw.items() if not k.startswith("_")}
     unknown = sorted(set(values) - names)
     if unknown:
         raise MalformedDataError(f"{path}: unknown gains {unknown}; valid: {sorted(names)}")
-    return Go1Gains(**values)
+    return values

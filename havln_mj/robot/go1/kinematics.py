@@ -46,3 +46,23 @@ def leg_fk(leg: int, q1: float, q2: float, q3: float) -> tuple[float, float, flo
     c, s = math.cos(q1), math.sin(q1)
     hx, hy = HIP_OFFSETS[leg]
     return hx + x, hy + c * y0 - s * zl, s * y0 + c * zl
+
+
+def leg_jacobian_t(
+    leg: int, q1: float, q2: float, q3: float, f: tuple[float, float, float]
+) -> tuple[float, float, float]:
+    """``Jᵀ f``: the joint torques whose work matches force ``f`` (trunk frame) at the foot."""
+    s2, c2 = math.sin(q2), math.cos(q2)
+    s23, c23 = math.sin(q2 + q3), math.cos(q2 + q3)
+    x = -_L * (s2 + s23)
+    zl = -_L * (c2 + c23)
+    y0 = LEG_SIDE[leg] * ABDUCTION
+    c, s = math.cos(q1), math.sin(q1)
+    y = c * y0 - s * zl
+    z = s * y0 + c * zl
+    dzl2, dzl3 = -x, _L * s23
+    fx, fy, fz = f
+    t1 = -z * fy + y * fz
+    t2 = zl * fx - s * dzl2 * fy + c * dzl2 * fz
+    t3 = -_L * c23 * fx - s * dzl3 * fy + c * dzl3 * fz
+    return t1, t2, t3

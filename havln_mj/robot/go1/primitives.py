@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import mujoco
 
@@ -23,8 +23,12 @@ from havln_mj.robot.go1 import constants as const
 from havln_mj.robot.go1.estimator import ESTIMATES, OdometryEstimator, TruthEstimator, quat_yaw
 from havln_mj.robot.go1.gains import Go1Gains, load_gains
 from havln_mj.robot.go1.gait import TrotGait
+from havln_mj.robot.go1.height_scan import HeightScan
+from havln_mj.robot.go1.results import Go1Pose, PrimitiveResult
+from havln_mj.robot.go1.terrain_gait import TerrainGait
 
 OnTick = Callable[[float], None]
+CONTROLLERS = ("trot", "terrain")
 MAX_DISTANCE = 10.0  # metres, per forward primitive
 MAX_TURN = 2.0 * math.pi  # radians, per turn primitive
 MAX_STAND = 600.0  # seconds
@@ -53,60 +57,6 @@ class _Stall:
         return self.stalled
 
 
-@dataclass(frozen=True)
-class Go1Pose:
-    """A trunk pose. ``heading`` follows :mod:`havln_mj.frames` (0 = +y, turning right)."""
-
-    x: float
-    y: float
-    z: float
-    yaw: float
-    heading: float
-
-
-@dataclass(frozen=True)
-class PrimitiveResult:
-    """What a primitive did.
-
-    Attributes:
-        kind: ``"forward"``, ``"turn"`` or ``"stand"``.
-        target: Asked distance (m) or heading change (rad, + right).
-        distance: True displacement along the start heading (m).
-        lateral: True displacement across the start heading (m, + left).
-        heading_change: True heading change (rad, + right).
-        est_distance: ``distance`` according to the controller's estimate.
-        est_lateral: ``lateral`` according to the estimate.
-        est_heading_change: ``heading_change`` according to the estimate.
-        duration: Physics time (s), settling included.
-        steps: Physics steps taken.
-        fell: The robot fell (tipped over or trunk too low); it needs a ``reset``.
-        timed_out: The target was not reached: out of time, or no progress for 1 s (e.g.
-            blocked by a wall).
-    """
-
-    kind: str
-    target: float
-    distance: float
-    lateral: float
-    heading_change: float
-    est_distance: float
-    est_lateral: float
-    est_heading_change: float
-    duration: float
-    steps: int
-    fell: bool
-    timed_out: bool
-
-    @property
-    def error(self) -> float:
-        """Achieved minus target, in metres for forward, radians for turn, 0 for stand."""
-        if self.kind == "forward":
-            return self.distance - self.target
-        if self.kind == "turn":
-            return wrap_angle(self.heading_change - self.target)
-        return 0.0
-
-
 def _clip(v: float, lo: float, hi: float) -> float:
     return lo if v < lo else hi if v > hi else v
 
@@ -127,6 +77,10 @@ class Go1Body:
         prefix: The robot's attach prefix.
         estimate: ``"truth"`` (simulator pose) or ``"odometry"`` (gyro + leg kinematics, drifts).
         gains: Controller gains (default: ``robots/go1/gains.json``).
+        controller: ``"trot"`` (the blind trot, :mod:`~havln_mj.robot.go1.gait`) or
+            ``"terrain"`` (the terrain-aware gait, :mod:`~havln_mj.robot.go1.terrain_gait`,
+            which reads the collision geometry through :attr:`scan`). With ``"terrain"``,
+            :meth:`reset` stands the robot on the ground as it is (a stair, a ramp).
     """
 
     def __init__(
@@ -136,7 +90,12 @@ class Go1Body:
         prefix: str = "go1/",
         estimate: str = "truth",
         gains: Go1Gains | None = None,
+        controller: str = "trot",
     ) -> None:
+        if controller not in CONTROLLERS:
+            raise InvalidArgumentError(
+                f"controller {controller!r} unknown; valid: {', '.join(CONTROLLERS)}"
+            )
         if estimate not in ESTIMATES:
             raise InvalidArgumentError(
                 f"estimate {estimate!r} unknown; valid: {', '.join(ESTIMATES)}"
@@ -177,11 +136,27 @@ class Go1Body:
                 model, data, self.qadr, self.dadr, self.gyro_adr, self.joint_qadr
             )
         self._truth = TruthEstimator(model, data, self.qadr, self.dadr)
-        self.gait = TrotGait(self.gains)
+        self.controller = controller
+        self.terrain = controller == "terrain"
+        self.scan = HeightScan(model, data, self.trunk_id)
+        self.gait = self._new_gait()
         self.fallen = False
         self._vx = self._vy = self._wz = 0.0  # filtered measured velocity
         self._ix = self._iy = self._iw = 0.0  # velocity-loop integrals
         self.est.reset()
+
+    def _new_gait(self) -> TrotGait | TerrainGait:
+        if self.terrain:
+            return TerrainGait(
+                self.gains.terrain,
+                self.data,
+                self.est,
+                self.joint_qadr,
+                self.joint_dadr,
+                self.foot_ids,
+                self.scan,
+            )
+        return TrotGait(self.gains)
 
     # ----------------------------------------------------------------- state
 
@@ -231,8 +206,8 @@ class Go1Body:
             0.0,
             math.sin(yaw / 2),
         )
-        self.gait = TrotGait(self.gains)
-        home = self.gait.step(0.0, 0.0, 0.0, 0.0)
+        self.gait = self._new_gait()
+        home = TrotGait(self.gains).step(0.0, 0.0, 0.0, 0.0)
         for qa, q in zip(self.joint_qadr, home, strict=True):
             d.qpos[qa] = q
         d.qvel[self.dadr : self.dadr + 6] = 0.0
@@ -240,11 +215,23 @@ class Go1Body:
             d.qvel[da] = 0.0
         self._write_ctrl(home)
         mujoco.mj_forward(m, d)
+        if self.terrain:  # stand on the ground as it is: a stair, a ramp
+            z, pitch, home = self.gait.standing_pose(x, y, yaw, z_floor + const.STAND_HEIGHT)
+            d.qpos[a + 2] = z + 0.002
+            w = (math.cos(yaw / 2), math.sin(yaw / 2))
+            p = (math.cos(pitch / 2), math.sin(pitch / 2))
+            d.qpos[a + 3 : a + 7] = (w[0] * p[0], -w[1] * p[1], w[0] * p[1], w[1] * p[0])
+            for qa, q in zip(self.joint_qadr, home, strict=True):
+                d.qpos[qa] = q
+            self._write_ctrl(home)
+            mujoco.mj_forward(m, d)
         self.fallen = False
         self._vx = self._vy = self._wz = 0.0
         self._ix = self._iy = self._iw = 0.0
         self.est.reset()
         self._truth.reset()
+        if self.terrain:
+            self.gait.reset()
         if settle > 0:
             self.stand(settle)
 
@@ -278,6 +265,7 @@ class Go1Body:
         x0, y0, yaw0 = e.x, e.y, e.yaw
         c0, s0 = math.cos(yaw0), math.sin(yaw0)
         sign = 1.0 if distance >= 0 else -1.0
+        v_max = g.odometry_v_max if self.estimate == "odometry" else g.forward_v_max
         stall = _Stall(self.data, STALL_SECONDS, STALL_DISTANCE)
 
         def command(hold: bool) -> tuple[float, float, float, bool]:
@@ -292,7 +280,7 @@ class Go1Body:
             if hold or done:  # no speed floor: creep back or forward onto the target
                 v = _clip(g.forward_kp * rem, -g.forward_v_min, g.forward_v_min)
             else:
-                v = sign * _clip(g.forward_kp * abs(rem), g.forward_v_min, g.forward_v_max)
+                v = sign * _clip(g.forward_kp * abs(rem), g.forward_v_min, v_max)
             vl = _clip(-g.forward_k_lateral * lat, -0.15, 0.15)
             w = _clip(-g.forward_k_yaw * dyaw, -0.5, 0.5)
             cd, sd = math.cos(dyaw), math.sin(dyaw)
@@ -364,7 +352,7 @@ class Go1Body:
         if self.fallen or self.is_fallen():
             self.fallen = True
             return self._result(kind, target, truth0, est0, t0, steps, False)
-        n = g.control_decimation
+        n = g.terrain.control_decimation if self.terrain else g.control_decimation
         dt = n * m.opt.timestep
         alpha = min(1.0, dt / g.velocity_filter) if g.velocity_filter > 0 else 1.0
         self._ix = self._iy = self._iw = 0.0
@@ -393,7 +381,7 @@ class Go1Body:
                 settle_end = d.time + (g.settle if walk else 0.0)
             if stage == "settle" and d.time >= settle_end - 1e-9:
                 break
-            if gait.walking:
+            if gait.walking and not self.terrain:  # the terrain gait holds speed itself
                 self._ix = _clip(
                     self._ix + g.ki_velocity * (vx - self._vx) * dt,
                     -g.integral_limit_velocity,
@@ -409,6 +397,7 @@ class Go1Body:
                     -g.integral_limit_yaw_rate,
                     g.integral_limit_yaw_rate,
                 )
+            if gait.walking:
                 q = gait.step(
                     dt, vx + self._ix, vy + self._iy, wz + self._iw, self._vx - vx, self._vy - vy
                 )

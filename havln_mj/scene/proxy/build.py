@@ -144,7 +144,51 @@ def build_proxy(graph: NavGraph, params: ProxyParams | None = None) -> Proxy:
     for (a, b), flight in flights.items():
         if (a, b) in faults:
             routes[(a, b)] = (a, *(tuple(map(float, q)) for q in flight[1:-1]), b)
+    drawn = [g for e, g in legs_of.items() if e not in moved or e not in flights]
+    drawn += [g for e, f in flights.items() for g in flight_legs(f, comp_of[e[0]])]
+    layers, boxes, faults = _cut_stairs(graph, edges, faults, routes, discs, drawn, grid, p)
     return Proxy(boxes, grid, [layer.free for layer in layers], faults, crossing, routes)
+
+
+def _cut_stairs(
+    graph: NavGraph,
+    edges: list[Edge],
+    faults: dict[Edge, str],
+    routes: dict[Edge, Route],
+    discs: list[Disc],
+    legs: list[Leg],
+    grid: Grid,
+    p: ProxyParams,
+) -> tuple[list[Layer], BoxSet, dict[Edge, str]]:
+    """The proxy redrawn with its stairs cut into treads and risers, where that breaks no walk.
+
+    The proxy is planned with stairs drawn as ramps at their edge's grade. Cutting them into
+    treads moves floors by up to half a riser, which can leave a viewpoint halfway up a stair
+    out of reach: the stairs within ``_FLIGHT_MARGIN`` of a path that broke (an edge that
+    walked straight, a route, a flight) stay ramps, and the proxy is redrawn until none
+    breaks.
+    """
+    paths = [route_floor_points(graph, r) for r in routes.values()]
+    stepped = [g._replace(stepped=True) for g in legs]
+    while True:
+        layers, boxes = draw_elements(discs, stepped, grid, p)
+        new_faults = _faults(graph, edges, boxes, p)
+        broken = [route_floor_points(graph, e) for e in new_faults if e not in faults]
+        broken += [q for q in paths if path_fault(q, boxes, p) is not None]
+        if not broken:
+            return layers, boxes, new_faults
+        spans, m = np.array([plan_span(q) for q in broken]), _FLIGHT_MARGIN
+        near = [
+            g.stepped
+            and spans_meet(spans, np.minimum(g.a, g.b) - m, np.maximum(g.a, g.b) + m).any()
+            for g in stepped
+        ]
+        if not any(near):  # nothing left to smooth there: the planned drawing
+            layers, boxes = draw_elements(discs, legs, grid, p)
+            return layers, boxes, faults
+        stepped = [
+            g._replace(stepped=False) if n else g for g, n in zip(stepped, near, strict=True)
+        ]
 
 
 def _grid(xy: np.ndarray, p: ProxyParams) -> Grid:

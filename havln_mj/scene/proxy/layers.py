@@ -48,6 +48,9 @@ class Layer:
     near: np.ndarray  # Chebyshev distance to the nearest path (viewpoint or edge) covering it
     comp: np.ndarray  # graph component of that element, -1 where not free
     stair: np.ndarray  # whether that element is a climbing edge
+    base: np.ndarray  # that stair's bottom floor (nan where no stair)
+    top: np.ndarray  # its top floor
+    rise: np.ndarray  # and its riser height (signed)
 
     @classmethod
     def empty(cls, shape: tuple[int, int]) -> Layer:
@@ -61,6 +64,9 @@ class Layer:
             near=np.full(shape, np.inf),
             comp=np.full(shape, -1),
             stair=np.zeros(shape, bool),
+            base=np.full(shape, np.nan),
+            top=np.full(shape, np.nan),
+            rise=np.full(shape, np.nan),
         )
 
     def clear(
@@ -73,6 +79,9 @@ class Layer:
         self.line[window][cells] = False
         self.comp[window][cells] = -1
         self.stair[window][cells] = False
+        self.base[window][cells] = np.nan
+        self.top[window][cells] = np.nan
+        self.rise[window][cells] = np.nan
         self.dist[window][cells] = np.inf
         self.near[window][cells] = np.inf
 
@@ -88,7 +97,9 @@ class Layer:
 
     def height_in(self, window: tuple[slice, slice]) -> np.ndarray:
         """Floor height over ``window`` of the grid, nan where not free."""
-        return _height(self.wsum[window], self.whsum[window], self.cap[window], self.line[window])
+        w = window
+        h = _height(self.wsum[w], self.whsum[w], self.cap[w], self.line[w])
+        return stepped(h, self.base[w], self.top[w], self.rise[w])
 
 
 def _height(wsum, whsum, cap, line) -> np.ndarray:
@@ -98,8 +109,32 @@ def _height(wsum, whsum, cap, line) -> np.ndarray:
     return np.where(wsum > 0, np.where(line, h, np.minimum(h, cap)), np.nan)
 
 
+def stepped(height: np.ndarray, base: np.ndarray, top: np.ndarray, rise: np.ndarray) -> np.ndarray:
+    """Heights of stair cells moved onto their stair's treads.
+
+    A cell between its stair's ``base`` and ``top`` floors, ``k`` risers up (the nearest whole
+    number of ``rise`` above ``base``), stands at ``base + k·rise``, both on the
+    ``FLOOR_QUANTUM`` grid: the risers then differ from ``rise`` by at most a quantum, and
+    never exceed it rounded up to one. Cells beyond the stair's floors (where it blends into
+    its landings) keep their height.
+    """
+    with np.errstate(invalid="ignore"):
+        inside = (height - base) * (top - height) >= 0.0
+    stair = np.isfinite(rise) & np.isfinite(height) & inside
+    if not stair.any():
+        return height
+    out = height.copy()
+    b, r = base[stair], rise[stair]
+    k = np.round((height[stair] - b) / r)
+    out[stair] = (
+        np.round(b / FLOOR_QUANTUM) * FLOOR_QUANTUM
+        + np.round(k * r / FLOOR_QUANTUM) * FLOOR_QUANTUM
+    )
+    return out
+
+
 def _place(
-    layers, shape, window, mask, height, dist, cheb, reach, comp, stair, p: ProxyParams
+    layers, shape, window, mask, height, dist, cheb, reach, comp, steps, p: ProxyParams
 ) -> None:
     """Adds one element's cells to the layers, cell by cell.
 
@@ -115,7 +150,7 @@ def _place(
     remaining = mask.copy()
     for layer in layers:  # blend into a layer close enough, wherever it stands
         blend = remaining & (np.abs(layer.height_in(window) - height) <= p.layer_gap)
-        _add(layer, window, blend, height, dist, cheb, reach, comp, stair, p)
+        _add(layer, window, blend, height, dist, cheb, reach, comp, steps, p)
         remaining &= ~blend
     k = 0
     while remaining.any():
@@ -132,13 +167,16 @@ def _place(
         new_wins = np.where(np.isnan(low_wins), dist < layer.dist[window], low_wins == lower)
         take = contested & new_wins
         layer.clear(take, window)
-        _add(layer, window, empty | take, height, dist, cheb, reach, comp, stair, p)
+        _add(layer, window, empty | take, height, dist, cheb, reach, comp, steps, p)
         remaining &= ~(empty | contested)
         k += 1
 
 
-def _add(layer, window, add, height, dist, cheb, reach, comp, stair, p: ProxyParams) -> None:
-    """Adds an element's floor to the cells ``add`` (a mask over ``window``) of ``layer``."""
+def _add(layer, window, add, height, dist, cheb, reach, comp, steps, p: ProxyParams) -> None:
+    """Adds an element's floor to the cells ``add`` (a mask over ``window``) of ``layer``.
+
+    ``steps`` is a stair's :func:`stair_steps` or None for a floor without steps.
+    """
     ws, whs, dd, nn = (
         layer.wsum[window],
         layer.whsum[window],
@@ -157,7 +195,11 @@ def _add(layer, window, add, height, dist, cheb, reach, comp, stair, p: ProxyPar
     nearer = add & (dist < dd)
     dd[nearer] = dist[nearer]
     layer.comp[window][nearer] = comp
-    layer.stair[window][nearer] = stair
+    layer.stair[window][nearer] = steps is not None
+    base, top, rise = steps if steps is not None else (np.nan, np.nan, np.nan)
+    layer.base[window][nearer] = base
+    layer.top[window][nearer] = top
+    layer.rise[window][nearer] = rise
 
 
 def _lower_wins(low: np.ndarray, high: np.ndarray, p: ProxyParams) -> np.ndarray:
@@ -192,7 +234,9 @@ class Disc(NamedTuple):
 class Leg(NamedTuple):
     """A straight walk's free floor: a corridor from ``a`` (floor ``fa``) to ``b`` (``fb``).
 
-    The corridor is ``corridor_half_width`` wide on each side; its height is interpolated.
+    The corridor is ``corridor_half_width`` wide on each side; its height is interpolated,
+    and where it climbs as a stair cut into treads and risers when ``stepped`` (see
+    :func:`stair_steps`).
     """
 
     a: np.ndarray
@@ -200,6 +244,7 @@ class Leg(NamedTuple):
     fa: float
     fb: float
     comp: int
+    stepped: bool = False
 
 
 def graph_elements(
@@ -215,6 +260,18 @@ def graph_elements(
     return discs, legs
 
 
+def stair_steps(fa: float, fb: float, p: ProxyParams) -> tuple[float, float, float] | None:
+    """(first floor, last floor, riser) of a corridor from ``fa`` to ``fb``; None unless a stair.
+
+    A corridor climbing more than ``stair_rise`` is a stair of equal risers no higher than
+    ``riser``, its first at ``fa``.
+    """
+    if abs(fb - fa) <= p.stair_rise:
+        return None
+    n = int(np.ceil(abs(fb - fa) / p.riser - 1e-9))
+    return fa, fb, (fb - fa) / n
+
+
 def rasterise(discs: list[Disc], legs: list[Leg], grid: Grid, p: ProxyParams) -> list[Layer]:
     """The layers of free floor of ``discs`` and ``legs``, lowest elements first."""
     layers: list[Layer] = []
@@ -222,13 +279,13 @@ def rasterise(discs: list[Disc], legs: list[Leg], grid: Grid, p: ProxyParams) ->
         window, d, cheb = disc(grid, xy, p.viewpoint_radius)
         mask, height = d <= p.viewpoint_radius, np.full(d.shape, f)
         reach = p.viewpoint_radius
-        _place(layers, grid.shape, window, mask, height, d, cheb, reach, comp, False, p)
-    for pa, pb, fa, fb, comp in sorted(legs, key=lambda g: min(g.fa, g.fb)):
+        _place(layers, grid.shape, window, mask, height, d, cheb, reach, comp, None, p)
+    for pa, pb, fa, fb, comp, stepped in sorted(legs, key=lambda g: min(g.fa, g.fb)):
         window, d, cheb, t = corridor(grid, pa, pb, p.corridor_half_width)
-        stair = abs(fb - fa) > p.stair_rise
         mask, height = d <= p.corridor_half_width, fa + t * (fb - fa)
         reach = p.corridor_half_width
-        _place(layers, grid.shape, window, mask, height, d, cheb, reach, comp, stair, p)
+        steps = stair_steps(fa, fb, p) if stepped else None
+        _place(layers, grid.shape, window, mask, height, d, cheb, reach, comp, steps, p)
     return layers
 
 

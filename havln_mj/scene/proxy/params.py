@@ -23,6 +23,8 @@ class ProxyParams:
         min_slab: Thinnest a slab is drawn: over a walkway below, a slab is thinned to keep
             the bodies walking there clear.
         stair_rise: An edge climbing more than this is drawn as stairs (its own material).
+        riser: Highest riser of a stair (drawn risers are whole floor quanta no higher than
+            this rounded up to one).
         headroom: Floors this far apart may overlap (storeys); closer ones may not. At least
             ``body_z[1] + slab``, so that a body passes under the floor above it.
         body_radius: Half side of the square footprint of the body whose walk is checked.
@@ -36,7 +38,8 @@ class ProxyParams:
         route_ratio: A route through other viewpoints may be at most this many times as
             long as its edge.
         stair_grade: Steepest climb of a flight drawn for an edge the graph cannot route
-            (rise over run; 0.75 is 37°, a common stair).
+            (rise over run; 0.75 is 37°, a common stair: risers of ``riser`` on treads of
+            0.24 m).
     """
 
     cell: float = 0.1
@@ -48,6 +51,7 @@ class ProxyParams:
     slab: float = 0.1
     min_slab: float = 0.02
     stair_rise: float = 0.3
+    riser: float = 0.18
     body_radius: float = 0.2
     body_z: tuple[float, float] = (0.3, 1.8)
     step: float = 0.2

@@ -72,24 +72,9 @@ def path_fault(points: np.ndarray, boxes: BoxSet, p: ProxyParams) -> str | None:
         return "steep"  # a straight leg this steep is no walk, whatever is drawn
     pts, run = samples(points, p.cell / 2)
     x, y, f = pts[:, :1], pts[:, 1:2], pts[:, 2:]
-    # Only boxes near the path matter.
-    lo_xy, hi_xy = pts[:, :2].min(axis=0) - r, pts[:, :2].max(axis=0) + r
-    near = np.all(boxes.lo[:, :2] <= hi_xy, axis=1) & np.all(boxes.hi[:, :2] >= lo_xy, axis=1)
-    lo, hi = boxes.lo[near][None], boxes.hi[near][None]  # (1, B, 3)
-    over = (lo[..., 0] <= x) & (hi[..., 0] >= x) & (lo[..., 1] <= y) & (hi[..., 1] >= y)
-    gap = np.where(over, np.abs(hi[..., 2] - f), np.inf)
-    if gap.shape[1] == 0:
+    support, lo, hi = _support(pts, boxes, p)
+    if support is None:
         return "no_floor"
-    nearest = gap.argmin(axis=1)
-    support = np.where(gap.min(axis=1) <= p.layer_gap, hi[0, nearest, 2], np.inf)
-    if not np.isfinite(support).all():
-        return "no_floor"
-    # A top inside another box is no floor: the body stands on top of the solid around it.
-    for _ in range(len(boxes)):
-        buried = over & (lo[..., 2] <= support[:, None]) & (hi[..., 2] > support[:, None] + 1e-9)
-        if not buried.any():
-            break
-        support = np.maximum(support, np.where(buried, hi[..., 2], -np.inf).max(axis=1))
     if np.abs(support[[0, -1]] - f[[0, -1], 0]).max() > p.step / 2 + 1e-6:
         return "no_floor"
     if np.abs(np.diff(support)).max(initial=0.0) > p.step + 1e-6:
@@ -106,6 +91,64 @@ def path_fault(points: np.ndarray, boxes: BoxSet, p: ProxyParams) -> str | None:
     )
     meets &= (lo[..., 2] < support[:, None] + p.body_z[1]) & (hi[..., 2] > ahead + p.body_z[0])
     return "blocked" if meets.any() else None
+
+
+def _support(pts: np.ndarray, boxes: BoxSet, p: ProxyParams):
+    """The support under each sample (see the module doc), None where one has none.
+
+    Returns:
+        The support heights (or None), and the near boxes' lo and hi, shaped (1, B, 3).
+    """
+    r = p.body_radius
+    x, y, f = pts[:, :1], pts[:, 1:2], pts[:, 2:]
+    # Only boxes near the path matter.
+    lo_xy, hi_xy = pts[:, :2].min(axis=0) - r, pts[:, :2].max(axis=0) + r
+    near = np.all(boxes.lo[:, :2] <= hi_xy, axis=1) & np.all(boxes.hi[:, :2] >= lo_xy, axis=1)
+    lo, hi = boxes.lo[near][None], boxes.hi[near][None]  # (1, B, 3)
+    over = (lo[..., 0] <= x) & (hi[..., 0] >= x) & (lo[..., 1] <= y) & (hi[..., 1] >= y)
+    gap = np.where(over, np.abs(hi[..., 2] - f), np.inf)
+    if gap.shape[1] == 0:
+        return None, lo, hi
+    nearest = gap.argmin(axis=1)
+    support = np.where(gap.min(axis=1) <= p.layer_gap, hi[0, nearest, 2], np.inf)
+    if not np.isfinite(support).all():
+        return None, lo, hi
+    # A top inside another box is no floor: the body stands on top of the solid around it.
+    for _ in range(len(boxes)):
+        buried = over & (lo[..., 2] <= support[:, None]) & (hi[..., 2] > support[:, None] + 1e-9)
+        if not buried.any():
+            break
+        support = np.maximum(support, np.where(buried, hi[..., 2], -np.inf).max(axis=1))
+    return support, lo, hi
+
+
+def stair_steps(
+    points: np.ndarray,
+    boxes: BoxSet,
+    p: ProxyParams,
+    spacing: float = 0.01,
+    least: float = 0.03,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The risers and treads a path crosses: its support sampled every ``spacing``.
+
+    A riser is a rise or drop of more than ``least`` between neighbouring samples (heights
+    in metres, signed along the path); a tread is the run between two risers (the flat runs
+    before the first and after the last are landings, not treads).
+
+    Returns:
+        Risers and treads (m); both empty where the path has no support.
+    """
+    pts, run = samples(np.asarray(points, dtype=float), spacing)
+    support, _, _ = _support(pts, boxes, p)
+    if support is None:
+        return np.zeros(0), np.zeros(0)
+    at = np.flatnonzero(np.abs(np.diff(support)) > least)
+    if not len(at):
+        return np.zeros(0), np.zeros(0)
+    # A riser split between neighbouring samples counts once.
+    groups = np.split(at, np.flatnonzero(np.diff(at) > 1) + 1)
+    risers = np.array([support[g[-1] + 1] - support[g[0]] for g in groups])
+    return risers, np.diff([run[g[0]] for g in groups])
 
 
 def _too_steep(support: np.ndarray, run: np.ndarray, grade: float, window: float) -> bool:

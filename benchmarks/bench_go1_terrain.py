@@ -1,0 +1,206 @@
+"""The GO1 on stairs and ramps: test courses, and the stair edges of real buildings' proxies.
+
+* **Courses** (``havln_mj.robot.go1.courses``): straight stairs of 12 risers (0.15, 0.17,
+  0.19 m) on 0.28 m treads, and ramps of 10, 20 and 30° over a 2.5 m run, each walked up and
+  down as one ``forward`` primitive from 1 m before the flight to 1 m past it (random start
+  offset ±0.1 m across and heading ±0.1 rad). A walk succeeds when the robot has not fallen
+  and stands on the far landing within 0.3 m of the target. Reports success, falls,
+  time-outs, time and the farthest it got (fraction of the flight's height).
+* **Proxy stairs**: the stair edges (floors more than 0.3 m apart) on the HA-R2R val_seen
+  paths, in the graph proxies of their buildings, each walked both ways with
+  ``LeggedAgent.go_to`` (through the edge's route when it has one). An edge counts when the
+  robot ends within 0.3 m of the viewpoint's floor point, on its floor, without falling.
+
+Prints one JSON object. Run:
+``python benchmarks/bench_go1_terrain.py [--walks 100] [--parts courses,proxy] [--proxy-edges N]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import json
+import math
+import os
+import time
+from pathlib import Path
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import mujoco
+import numpy as np
+from common import machine
+
+from havln_mj.robot.go1 import Go1Body, Go1Gains, add_go1, load_gains
+from havln_mj.robot.go1.courses import START_X, ramp_spec, stairs_spec
+
+STAIRS = (0.15, 0.17, 0.19)
+RAMPS = (10.0, 20.0, 30.0)
+REACHED = 0.3  # metres from the target that count as arrived
+
+
+def _course(
+    kind: str, size: float, down: bool, walks: int, seed: int, controller: str, gains: Go1Gains
+) -> dict:
+    spec, course = stairs_spec(riser=size) if kind == "stairs" else ramp_spec(size)
+    add_go1(spec)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    robot = Go1Body(model, data, gains=gains, controller=controller)
+    rng = np.random.default_rng(seed)
+    start_x, goal_x = (course.top_x, START_X) if down else (START_X, course.top_x)
+    start_z, goal_z = (course.rise, 0.0) if down else (0.0, course.rise)
+    heading = -math.pi / 2 if down else math.pi / 2
+    ok = falls = timeouts = 0
+    seconds, progress = [], []
+    steps, wall = 0, 0.0
+    for _ in range(walks):
+        robot.reset(
+            start_x, float(rng.uniform(-0.1, 0.1)), start_z, heading + rng.uniform(-0.1, 0.1)
+        )
+        best = [0.0]
+
+        def track(_t: float, best=best) -> None:
+            p = robot.true_pose()
+            climbed = (p.z - const_stand(start_z)) / (goal_z - start_z)
+            best[0] = max(best[0], climbed)
+
+        t = time.perf_counter()
+        res = robot.forward(abs(goal_x - start_x), on_tick=track)
+        wall += time.perf_counter() - t
+        steps += res.steps
+        p = robot.true_pose()
+        arrived = abs(p.x - goal_x) < REACHED and abs(p.y) < course.width / 2
+        arrived = arrived and abs(p.z - const_stand(goal_z)) < 0.15
+        ok += arrived and not res.fell
+        falls += res.fell
+        timeouts += res.timed_out and not res.fell
+        seconds.append(res.duration)
+        progress.append(min(1.0, best[0]))
+    unit = "m" if kind == "stairs" else "deg"
+    return {
+        "course": f"{kind} {size:g} {unit} {'down' if down else 'up'}",
+        "walks": walks,
+        "success": round(ok / walks, 3),
+        "falls": round(falls / walks, 3),
+        "timeouts": round(timeouts / walks, 3),
+        "mean_progress": round(float(np.mean(progress)), 3),
+        "mean_seconds": round(float(np.mean(seconds)), 1),
+        "real_time_factor": round(steps * model.opt.timestep / max(wall, 1e-9), 1),
+    }
+
+
+def const_stand(floor: float) -> float:
+    """Trunk height standing on a floor."""
+    return floor + 0.27
+
+
+def _proxy_stairs(data: Path, edges: int, seed: int, controller: str) -> dict:
+    """Stair edges on HA-R2R val_seen paths, walked both ways in the graph proxies."""
+    from havln_mj.scene.scan import load_scan
+    from havln_mj.sim.crowd import NO_CROWD
+    from havln_mj.sim.legged import PREFIX, LeggedAgent, LeggedOptions, LeggedWorld
+    from havln_mj.sim.world import WorldOptions
+
+    episodes = data / "ha_r2r" / "HA_val_seen.json"
+    conn = data / "mp3d_connectivity"
+    if not episodes.is_file() or not conn.is_dir():
+        return {"skipped": f"needs {episodes} and {conn}"}
+    by_scan: dict[str, set] = {}
+    for ep in json.loads(episodes.read_text()):
+        for a, b in itertools.pairwise(ep["path"]):
+            by_scan.setdefault(ep["scan"], set()).add(tuple(sorted((a, b))))
+    rng = np.random.default_rng(seed)
+    scans = {sid: load_scan(sid, connectivity_dir=conn) for sid in sorted(by_scan)}
+    todo = [
+        (sid, e)
+        for sid, scan in scans.items()
+        for e in sorted(by_scan[sid])
+        if abs(scan.graph.floor_z(e[0]) - scan.graph.floor_z(e[1])) > 0.3
+    ]
+    n_edges = len(todo)
+    if edges and len(todo) > edges:
+        todo = [todo[k] for k in sorted(rng.permutation(len(todo))[:edges])]
+    rows = []
+    for sid in sorted({sid for sid, _ in todo}):
+        scan = scans[sid]
+        g = scan.graph
+        world = LeggedWorld(scan, WorldOptions(collision="boxes"), NO_CROWD, LeggedOptions())
+        agent = LeggedAgent(world)
+        agent.body = Go1Body(world.model, agent.data, PREFIX, controller=controller)
+        for a, b in (e for s, e in todo if s == sid):
+            for src, dst in ((a, b), (b, a)):
+                heading = float(rng.uniform(0, 2 * math.pi))
+                agent.place(g.position(src), g.floor_z(src), heading, 0.0)
+                target = np.append(g.position(dst)[:2], g.floor_z(dst))
+                out = agent.go_to(target, None, 0.0)
+                end = agent.position()
+                gap = float(np.hypot(*(end[:2] - target[:2])))
+                on_floor = abs(end[2] - const_stand(target[2])) < 0.2
+                rows.append(
+                    {
+                        "scan": sid,
+                        "rise_m": round(float(target[2] - g.floor_z(src)), 2),
+                        "routed": scan.route(src, dst) is not None,
+                        "walked": bool(gap < REACHED and on_floor and not out.fell),
+                        "fell": out.fell,
+                        "end_error_m": round(gap, 3),
+                        "seconds": round(out.duration, 1),
+                    }
+                )
+    n = max(len(rows), 1)
+    return {
+        "stair_edges_on_paths": n_edges,
+        "stair_edge_walks": len(rows),
+        "walked": round(sum(r["walked"] for r in rows) / n, 3),
+        "falls": round(sum(r["fell"] for r in rows) / n, 3),
+        "up_walked": round(_share([r for r in rows if r["rise_m"] > 0]), 3),
+        "down_walked": round(_share([r for r in rows if r["rise_m"] < 0]), 3),
+        "mean_seconds": round(float(np.mean([r["seconds"] for r in rows])), 1) if rows else None,
+        "rows": rows,
+    }
+
+
+def _share(rows: list[dict]) -> float:
+    return sum(r["walked"] for r in rows) / max(len(rows), 1)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--walks", type=int, default=100, help="walks per course")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--parts", default="courses,proxy")
+    parser.add_argument("--controller", default="terrain", choices=("terrain", "trot"))
+    parser.add_argument("--proxy-edges", type=int, default=0, help="0: every stair edge")
+    parser.add_argument("--gains", type=Path, default=None, help="gains.json to use")
+    parser.add_argument(
+        "--data",
+        type=Path,
+        default=Path(
+            os.environ.get(
+                "HAVLN_SHARED_DATA", Path(__file__).resolve().parents[2] / "shared" / "data"
+            )
+        ),
+    )
+    args = parser.parse_args()
+    parts = set(args.parts.split(","))
+    gains = load_gains(args.gains)
+    out: dict = {"machine": machine(), "controller": args.controller, "gains": str(args.gains)}
+    t = time.perf_counter()
+    if "courses" in parts:
+        cells = [("stairs", r) for r in STAIRS] + [("ramp", a) for a in RAMPS]
+        out["courses"] = [
+            _course(kind, size, down, args.walks, args.seed + k, args.controller, gains)
+            for k, (kind, size) in enumerate(cells)
+            for down in (False, True)
+        ]
+    if "proxy" in parts:
+        out["proxy_stairs_val_seen"] = _proxy_stairs(
+            args.data, args.proxy_edges, args.seed, args.controller
+        )
+    out["wall_seconds"] = round(time.perf_counter() - t, 1)
+    print(json.dumps(out, indent=1))
+
+
+if __name__ == "__main__":
+    main()
