@@ -24,8 +24,9 @@ Matterport3DSimulator's ``MatterSim.Simulator``). On top of MatterSim:
 * **Egocentric actions** (HA-VLN): ``makeEgoAction`` (see :mod:`havln_mj.sim.egocentric`).
 * **Images**: BGR ``uint8`` and ``uint16`` depth in 0.25 mm units, as MatterSim; RGB and
   ``float32`` metres on request (``set_color_order``, ``set_depth_units``). Every image comes
-  from the frame pipeline (:mod:`havln_mj.sim.frame`); :meth:`~havln_mj.sim.extensions.SimulatorExtensions.set_film` also draws
-  frames during actions (videos).
+  from the frame pipeline (:mod:`havln_mj.sim.frame`);
+  :meth:`~havln_mj.sim.extensions.SimulatorExtensions.set_film` also draws frames during
+  actions (videos).
 
 Differences from MatterSim, on purpose: setters called after ``initialize`` are ignored as
 MatterSim does, but with a warning; a list argument of the wrong length raises even when too
