@@ -11,14 +11,12 @@ pushing on a wall would otherwise rear up and fall).
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 import mujoco
 
 from havln_mj.frames import wrap_angle
-
-if TYPE_CHECKING:
-    from havln_mj.robot.go1.primitives import Go1Body
+from havln_mj.robot.go1.gains import Go1Gains
 
 # Blocked: no progress by this much in this long ends a primitive.
 STALL_SECONDS = 1.0
@@ -29,6 +27,24 @@ STALL_ANGLE = 0.05  # rad
 def clip(v: float, lo: float, hi: float) -> float:
     """``v`` clipped to [lo, hi]."""
     return lo if v < lo else hi if v > hi else v
+
+
+class Walker(Protocol):
+    """What a command reads of the robot (a :class:`~havln_mj.robot.go1.primitives.Go1Body`)."""
+
+    gains: Go1Gains
+    est: Any  # the trunk state estimate (x, y, yaw)
+    data: mujoco.MjData
+
+    @property
+    def measured_vx(self) -> float:
+        """The trunk's filtered forward speed (m/s)."""
+        ...
+
+    @property
+    def measured_wz(self) -> float:
+        """The trunk's filtered yaw rate (rad/s)."""
+        ...
 
 
 class Stall:
@@ -52,7 +68,7 @@ class Stall:
 class ForwardCommand:
     """Walks ``distance`` metres along the start heading (negative: backwards) at ≤ ``v_max``."""
 
-    def __init__(self, body: Go1Body, distance: float, v_max: float) -> None:
+    def __init__(self, body: Walker, distance: float, v_max: float) -> None:
         e = body.est
         self.body, self.distance, self.v_max = body, distance, v_max
         self.x0, self.y0, self.yaw0 = e.x, e.y, e.yaw
@@ -85,7 +101,7 @@ class ForwardCommand:
 class TurnCommand:
     """Turns in place by ``theta`` radians of heading (positive turns right)."""
 
-    def __init__(self, body: Go1Body, theta: float) -> None:
+    def __init__(self, body: Walker, theta: float) -> None:
         e = body.est
         self.body = body
         self.x0, self.y0 = e.x, e.y
