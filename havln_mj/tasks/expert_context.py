@@ -18,7 +18,7 @@ from havln_mj.tasks.planning import TURN
 from havln_mj.tasks.step import GraphAction
 
 WAIT: GraphAction = (0, 0.0, 0.0)
-"""The graph action that stays put: the current viewpoint (index 0), no turn."""
+"""The graph action that stays put (the current viewpoint, index 0, and no turn)."""
 # MatterSim's default camera (VFOV 0.8 rad, 320×240), when the simulator cannot tell.
 DEFAULT_HALF_HFOV = 0.8 * 320 / 240 / 2
 
