@@ -7,7 +7,7 @@ import pytest
 ray = pytest.importorskip("ray")
 
 from havln_mj.distributed import build_scenes_ray, evaluate_split_ray  # noqa: E402
-from havln_mj.distributed.evaluate import _shards  # noqa: E402
+from havln_mj.distributed.sharded import _shards  # noqa: E402
 from havln_mj.eval.cli import parse_args  # noqa: E402
 from havln_mj.eval.run import evaluate_split  # noqa: E402
 from havln_mj.tasks.procedural import procedural_episodes  # noqa: E402
