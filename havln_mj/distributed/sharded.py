@@ -20,11 +20,16 @@ import argparse
 import itertools
 import time
 
+from tqdm import tqdm
+
 from havln_mj.distributed._ray import ensure_ray
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.eval.run import run_instruction, score_split
 from havln_mj.eval.setup import evaluation_simulator, make_agent, people_report, protocol_of
 from havln_mj.tasks.episodes import Episode
+
+PIECES_PER_SHARD = 20
+"""Pieces each actor's shard is sent in, for the progress bar."""
 
 
 class ShardRunner:
@@ -53,6 +58,11 @@ def _shards(n: int, workers: int) -> list[range]:
     workers = max(1, min(workers, n))
     bounds = [round(i * n / workers) for i in range(workers + 1)]
     return [range(a, b) for a, b in itertools.pairwise(bounds) if b > a]
+
+
+def _pieces(shard: range, size: int) -> list[range]:
+    """``shard`` cut into contiguous pieces of ``size`` (the last one shorter)."""
+    return [range(i, min(i + size, shard.stop)) for i in range(shard.start, shard.stop, size)]
 
 
 def evaluate_split_ray(
@@ -99,11 +109,22 @@ def evaluate_split_ray(
         shards = _shards(len(items), workers)
         actors = [actor_cls.remote(args) for _ in shards]
         try:
-            futures = [
-                a.run.remote([items[i] for i in shard])
+            # Each actor's shard goes in small pieces (queued in order on the actor), so the
+            # bar moves as instructions finish on any worker.
+            size = max(1, len(items) // (len(shards) * PIECES_PER_SHARD))
+            sizes = {
+                a.run.remote([items[i] for i in piece]): len(piece)
                 for a, shard in zip(actors, shards, strict=True)
-            ]
-            records = [r for part in ray.get(futures) for r in part]
+                for piece in _pieces(shard, size)
+            }
+            pending = list(sizes)
+            with tqdm(
+                total=len(items), desc=f"{split} ({len(actors)} workers)", unit="instr"
+            ) as bar:
+                while pending:
+                    done, pending = ray.wait(pending, num_returns=1)
+                    records.extend(ray.get(done[0]))
+                    bar.update(sizes[done[0]])
         finally:
             for a in actors:
                 ray.kill(a)
