@@ -142,6 +142,13 @@ def _class_typehints(app, what: str, name: str, obj: object, *_: object) -> None
             recorded[param] = stringify_annotation(hint, "smart")
 
 
+def _skip_field_aliases(app, what: str, name: str, obj: object, skip: bool, *_: object):
+    """Skips a NamedTuple's field aliases: they say nothing, and an Attributes section would
+    document the fields twice."""
+    doc = getattr(obj, "__doc__", None)
+    return True if isinstance(doc, str) and doc.startswith("Alias for field number") else None
+
+
 def _purge(app, env, docname: str) -> None:
     """Forgets what a page claimed before it is read again."""
     for pages in env.domaindata.get("havln_modules", {}).values():
@@ -153,6 +160,7 @@ def setup(app) -> dict:
     """Registers the reference directive and the coverage check."""
     app.add_directive("havln-modules", HavlnModules)
     app.connect("autodoc-process-signature", _class_typehints, priority=600)
+    app.connect("autodoc-skip-member", _skip_field_aliases)
     app.connect("env-purge-doc", _purge)
     app.connect("env-check-consistency", _check_coverage)
     return {"parallel_read_safe": False}

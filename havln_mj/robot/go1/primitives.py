@@ -79,7 +79,7 @@ class Go1Body:
         gains: Controller gains (default: ``robots/go1/gains.json``).
         controller: ``"trot"`` (the blind trot, :mod:`~havln_mj.robot.go1.gait`) or
             ``"terrain"`` (the terrain-aware gait, :mod:`~havln_mj.robot.go1.terrain_gait`,
-            which reads the collision geometry through :attr:`scan`). With ``"terrain"``,
+            which reads the collision geometry through its ``scan``). With ``"terrain"``,
             :meth:`reset` stands the robot on the ground as it is (a stair, a ramp).
     """
 

@@ -65,7 +65,7 @@ class TerrainGait:
     """Gait generator on scanned terrain: twist in, 12 joint targets out.
 
     Same calling pattern as :class:`~havln_mj.robot.go1.gait.TrotGait`: :meth:`start`,
-    :meth:`step` every control tick, :meth:`request_stop`; :attr:`walking` turns false once
+    :meth:`step` every control tick, :meth:`request_stop`; ``walking`` turns false once
     every foot is down after a stop. :meth:`reset` after a teleport.
 
     Args:
