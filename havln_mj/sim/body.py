@@ -23,7 +23,6 @@ from typing import NamedTuple, Protocol
 import mujoco
 import numpy as np
 
-from havln_mj.errors import InvalidArgumentError
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.sim.crowd import Crowd
 from havln_mj.sim.frame import View, ViewSettings
@@ -216,46 +215,3 @@ def stands_at(graph: NavGraph, vp: str, position: np.ndarray, floor_z: float) ->
     p = graph.position(vp)
     near = math.hypot(p[0] - position[0], p[1] - position[1]) <= ARRIVAL_M
     return near and abs(graph.floor_z(vp) - floor_z) <= ARRIVAL_M
-
-
-def make_kind(
-    name: str,
-    load_scan: Callable[[str], object],
-    cfg: object,
-    speed: float,
-    turn_rate: float,
-    legged: object | None,
-) -> BodyKind:
-    """The body kind called ``name`` (:data:`BODY_KINDS`) for a simulator's settings.
-
-    Args:
-        name: ``"point"`` or ``"go1"``.
-        load_scan: Loads a scan by id.
-        cfg: The simulator's :class:`~havln_mj.sim.settings.Settings`.
-        speed: The point body's speed (m/s).
-        turn_rate: The point body's turning rate (rad/s).
-        legged: The GO1's :class:`~havln_mj.sim.legged.LeggedOptions` (None: defaults).
-
-    Raises:
-        InvalidArgumentError: Unknown name, or ``legged`` of the wrong type.
-    """
-    if name == "go1":
-        from havln_mj.sim.legged import LeggedOptions  # the GO1's physics, only when used
-        from havln_mj.sim.legged_body import LeggedKind
-
-        options = legged or LeggedOptions()
-        if not isinstance(options, LeggedOptions):
-            raise InvalidArgumentError(f"legged takes LeggedOptions, got {options!r}")
-        return LeggedKind(load_scan, cfg.world_options, options)
-    if name == "point":
-        from havln_mj.sim.point import PointKind
-
-        skybox = cfg.dataset_path if cfg.skybox else None
-        return PointKind(
-            load_scan, cfg.world_options, cfg.cache_size, speed, turn_rate, skybox_root=skybox
-        )
-    raise InvalidArgumentError(f"body {name!r} unknown; valid: {', '.join(BODY_KINDS)}")
-
-
-BODY_KINDS = ("point", "go1")
-"""The bodies a simulator can have (MatterSim's point camera rig, or the simulated GO1)."""
