@@ -143,8 +143,10 @@ def _class_typehints(app, what: str, name: str, obj: object, *_: object) -> None
 
 
 def _skip_field_aliases(app, what: str, name: str, obj: object, skip: bool, *_: object):
-    """Skips a NamedTuple's field aliases: they say nothing, and an Attributes section would
-    document the fields twice."""
+    """Skips a NamedTuple's field aliases ("Alias for field number N").
+
+    They say nothing, and the class's Attributes section would document the fields twice.
+    """
     doc = getattr(obj, "__doc__", None)
     return True if isinstance(doc, str) and doc.startswith("Alias for field number") else None
 
