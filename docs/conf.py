@@ -142,13 +142,11 @@ def _class_typehints(app, what: str, name: str, obj: object, *_: object) -> None
             recorded[param] = stringify_annotation(hint, "smart")
 
 
-def _skip_field_aliases(app, what: str, name: str, obj: object, skip: bool, *_: object):
-    """Skips a NamedTuple's field aliases ("Alias for field number N").
-
-    They say nothing, and the class's Attributes section would document the fields twice.
-    """
-    doc = getattr(obj, "__doc__", None)
-    return True if isinstance(doc, str) and doc.startswith("Alias for field number") else None
+def _skip_tuple_fields(app, what: str, name: str, obj: object, skip: bool, *_: object):
+    """Leaves a NamedTuple's field accessors out: its ``Attributes:`` section documents them."""
+    if type(obj).__name__ == "_tuplegetter":
+        return True
+    return None
 
 
 def _purge(app, env, docname: str) -> None:
@@ -162,7 +160,7 @@ def setup(app) -> dict:
     """Registers the reference directive and the coverage check."""
     app.add_directive("havln-modules", HavlnModules)
     app.connect("autodoc-process-signature", _class_typehints, priority=600)
-    app.connect("autodoc-skip-member", _skip_field_aliases)
+    app.connect("autodoc-skip-member", _skip_tuple_fields)
     app.connect("env-purge-doc", _purge)
     app.connect("env-check-consistency", _check_coverage)
     return {"parallel_read_safe": False}

@@ -1,13 +1,13 @@
 """The Body seam: what executes the simulator's actions, and what it reports.
 
 The simulator never asks which body it drives. A :class:`BodyKind` (one per simulator:
-``"point"`` or ``"go1"``, see :data:`~havln_mj.sim.bodies.BODY_KINDS`) makes a
-:class:`Body` per batch element on a scan; the body starts at a viewpoint, executes graph
-actions (a move to a neighbour, a turn, a wait) and, when it has a robot's action set, the
-robot's continuous actions, and returns an
-:class:`Outcome`: how long the action took, where the body's base was over time (the track the
-collision signal is sampled along), where it ended, whether it arrived, fell, diverged or
-touched anyone. It draws itself through the frame pipeline (:mod:`havln_mj.sim.frame`).
+``"point"`` or ``"go1"``, see :data:`~havln_mj.sim.bodies.BODY_KINDS`) makes a :class:`Body` per
+batch element on a scan; the body starts at a viewpoint, executes graph actions (a move to a
+neighbour, a turn, a wait) and, when it has a robot's action set, the robot's continuous
+actions, and returns an :class:`Outcome`: how long the action took, where the body's base was
+over time (the track the collision signal is sampled along), where it ended, whether it arrived,
+fell, diverged or touched anyone. It draws itself through the frame pipeline
+(:mod:`havln_mj.sim.frame`).
 
 **Truth.** ``Outcome.viewpoint`` is the viewpoint the body stands at when the action ends: the
 target when the body arrived within :data:`ARRIVAL_M` of it (horizontally, on its floor),
