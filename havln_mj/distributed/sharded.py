@@ -2,16 +2,12 @@
 
 ``--workers`` Ray actors each own a ``Simulator`` built like the single-process one;
 ``--address`` picks the cluster (default a local Ray; ``auto``: the running cluster;
-``ray://host:10001``: Ray Client). The instructions are cut
-into contiguous shards, run on the actors, merged back in the original order and scored
-once in the driver with the same :class:`~havln_mj.tasks.metrics.evaluator.Evaluator`, so the
-per-instruction metrics and the summary equal :func:`havln_mj.eval.run.evaluate_split`'s
-(only ``seconds`` and ``instructions_per_s`` differ).
-
-Caveat: ``evaluate_split`` draws every ``random`` agent from one generator in instruction
-order, which shards cannot reproduce; here instruction ``i`` gets its own generator
-``default_rng([seed, i])``, so ``random`` results are deterministic for any ``--workers`` but
-differ from the single-process run. The other built-in agents use no generator and match.
+``ray://host:10001``: Ray Client). The instructions are cut into contiguous shards, run on the
+actors, merged back in the original order and scored once in the driver with the same
+:class:`~havln_mj.tasks.metrics.evaluator.Evaluator`, so the per-instruction metrics and the
+summary equal :func:`havln_mj.eval.run.evaluate_split`'s (only ``seconds`` and
+``instructions_per_s`` differ): instruction ``i``'s ``random`` agent draws from its own
+generator ``default_rng([seed, i])`` in either.
 """
 
 from __future__ import annotations
