@@ -207,7 +207,8 @@ def terrain_report(records: Sequence[dict], success_distance: float) -> dict:
 
     Measured from where the body truly ended (the task step's distance, from the robot's
     true pose with the GO1), so a robot that stalled or fell on a stair counts as it is: a
-    fall is a fall and is never left out.
+    fall is a fall and is never left out. Success is SR's rule on that distance (below the
+    success distance, whether or not the agent chose to stop), and never after a fall.
     """
     out = {}
     for terrain in ("flat", "stairs"):
@@ -218,7 +219,7 @@ def terrain_report(records: Sequence[dict], success_distance: float) -> dict:
         out[terrain] = {
             "instructions": n,
             "success_rate": sum(
-                r["stopped"] and r["true_distance"] < success_distance for r in rows
+                not r["fell"] and r["true_distance"] < success_distance for r in rows
             )
             / n,
             "falls": sum(bool(r["fell"]) for r in rows),

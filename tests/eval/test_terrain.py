@@ -23,22 +23,24 @@ def test_falls_and_stalls_on_stairs_count_against_the_stairs():
     records = [
         _record("flat", True, 0.4, False),
         _record("flat", True, 3.5, False),  # stopped too far: not a success
+        _record("flat", False, 2.0, False),  # out of steps near the goal: a success, as in SR
         _record("stairs", False, 4.0, True, 6.0),  # fell on the stair: counted, never skipped
+        _record("stairs", False, 1.0, True, 8.0),  # fell near the goal: still not a success
         _record("stairs", True, 1.0, False, 30.0),
         _record("stairs", True, 2.9, False, 20.0),
     ]
     report = terrain_report(records, 3.0)
     assert report["flat"] == {
-        "instructions": 2,
-        "success_rate": 0.5,
+        "instructions": 3,
+        "success_rate": pytest.approx(2 / 3),
         "falls": 0,
-        "mean_distance_m": pytest.approx(1.95),
+        "mean_distance_m": pytest.approx(5.9 / 3),
         "mean_sim_seconds": 10.0,
     }
     stairs = report["stairs"]
-    assert stairs["instructions"] == 3 and stairs["falls"] == 1
-    assert stairs["success_rate"] == pytest.approx(2 / 3)
-    assert stairs["mean_sim_seconds"] == pytest.approx(56 / 3)
+    assert stairs["instructions"] == 4 and stairs["falls"] == 2
+    assert stairs["success_rate"] == pytest.approx(2 / 4)
+    assert stairs["mean_sim_seconds"] == pytest.approx(64 / 4)
 
 
 def test_stair_edges_climb_more_than_the_threshold(shared_data):
@@ -62,4 +64,6 @@ def test_eval_records_say_the_terrain_the_fall_and_the_true_distance(tmp_path):
     assert record["terrain"] in ("flat", "stairs") and record["fell"] is False
     assert record["true_distance"] < 3.0 and record["sim_seconds"] > 0
     summary = json.loads((out / "summary.json").read_text())[0]
-    assert summary["by_terrain"]["flat"]["instructions"] == len(lines)
+    flat = summary["by_terrain"]["flat"]
+    assert flat["instructions"] == len(lines)
+    assert flat["success_rate"] == pytest.approx(summary["sr"])  # the point body: SR's rule
