@@ -22,20 +22,11 @@ import numpy as np
 
 from havln_mj.frames import TWO_PI
 from havln_mj.sim.body import Body, BodyKind, Film, Outcome
-from havln_mj.sim.crowd import (
-    NO_PROXIMITY,
-    Crowd,
-    NearMemo,
-    Proximity,
-    batch_proximity,
-    ha3d_points,
-    knots_proximity,
-    sample_knots,
-    state_proximity,
-)
+from havln_mj.sim.crowd import NO_PROXIMITY, Crowd, Proximity, ha3d_points, state_proximity
 from havln_mj.sim.frame import View
 from havln_mj.sim.images import ImageFormat
 from havln_mj.sim.navigation import NavTable
+from havln_mj.sim.proximity import NearMemo, batch_proximity, knots_proximity, sample_knots
 from havln_mj.sim.rules import CollisionRule, HumanClock
 from havln_mj.sim.settings import Settings
 from havln_mj.sim.state import SimState, ViewPoint
