@@ -16,6 +16,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
+try:  # numpy's compiled interpolation, without np.interp's argument handling
+    from numpy._core.multiarray import interp_complex as _interp_complex
+except ImportError:  # numpy < 2
+    _interp_complex = np.interp
+
 _SAFE_S = 1e-6  # seconds past everyone's entry into their loop before the short path is taken
 _SUBSETS = 4096  # sets of people whose constants are kept
 
@@ -89,7 +94,7 @@ class PelvisTable:
         ``earliest`` (optional) is ``times.min()``, when the caller knows it.
         """
         c = self._columns(people)
-        f = np.multiply.outer(c.fps, times)
+        f = c.fps * times
         if earliest is None:
             earliest = float(times.min()) if len(times) else 0.0
         if earliest >= c.looping_from + _SAFE_S:
@@ -103,7 +108,7 @@ class PelvisTable:
             wrapped += c.loop_at
             f += c.base
             f = np.where(f > c.last_at, wrapped, f)
-        return np.interp(f, self.axis, self.values)
+        return _interp_complex(f, self.axis, self.values)
 
 
 class _Columns:
@@ -123,7 +128,7 @@ class _Columns:
 
     def __init__(self, fps, start_f, period, loop, last, base) -> None:
         col = lambda a: np.ascontiguousarray(a, float).reshape(-1, 1)  # noqa: E731
-        self.fps = np.ascontiguousarray(fps, float)
+        self.fps = col(fps)
         self.start_f, self.period, self.loop = col(start_f), col(period), col(loop)
         self.from_loop = col(start_f - loop)  # frames past loop_start at time 0
         self.loop_at = col(loop + base)  # where each loop begins on the axis

@@ -110,6 +110,7 @@ class Batch:
         self._near = NearMemo()
         self._cos_fov: float | None = None
         self._blank: tuple[np.ndarray, np.ndarray] | None = None
+        self._revision = -1  # the settings' revision _cos_fov and _blank were derived from
 
     def view(self, heading: float, elevation: float) -> tuple[float, float, int]:
         """Heading, elevation and view index under the view rules."""
@@ -181,8 +182,11 @@ class Batch:
         """
         cfg = self.cfg
         discretized, (lo, hi) = cfg.discretized, cfg.elevation_limits
-        self._prepare_step()
-        shared = self._tick(self.clock.after_action) if actions else None
+        if cfg.revision != self._revision:
+            self._prepare_step()
+        shared = None
+        if actions and self.clock.kind == "ha3d":
+            shared = self._tick(self.clock.after_action)
         along = self.rule.check == "action"
         elements, deferred = self.elements, []
         for n, (i, k, dh, de) in enumerate(actions):
@@ -226,10 +230,15 @@ class Batch:
         self._settle_all(moved)
 
     def _prepare_step(self) -> None:
-        """What every element's state needs this step: the navigation rule, blank images."""
+        """What every element's state needs this step: the navigation rule, blank images.
+
+        Derived once per change of the settings (the camera may change between steps).
+        """
         cfg = self.cfg
-        self._cos_fov = cfg.cos_half_hfov()
-        self._blank = None if cfg.rendering else self.format.blank(cfg.width, cfg.height)
+        if cfg.revision != self._revision:
+            self._revision = cfg.revision
+            self._cos_fov = cfg.cos_half_hfov()
+            self._blank = None if cfg.rendering else self.format.blank(cfg.width, cfg.height)
 
     def _settle_all(self, moved: list[tuple], starting: bool = False) -> None:
         """Settles each ``(element, outcome, heading asked, elevation, view index)``.

@@ -31,6 +31,8 @@ from havln_mj.sim.navigation import camera_positions
 from havln_mj.sim.world import WorldOptions, build_world
 
 log = logging.getLogger(__name__)
+_PI = math.pi
+_TWO_PI = 2.0 * math.pi
 
 
 class Stage:
@@ -187,10 +189,17 @@ class GraphPointBody:
     ) -> Outcome:
         """Moves straight to ``target``, then turns to ``heading``/``elevation``."""
         here = self.xyz
-        there = here if target == self.viewpoint else self._xyz[target]
         kind = self._kind
-        move_s = math.dist(here, there) / kind.speed
-        turn = max(abs(wrap_angle(heading - self.heading)), abs(elevation - self.elevation))
+        if target == self.viewpoint:
+            there, move_s = here, 0.0
+        else:
+            there = self._xyz[target]
+            move_s = math.dist(here, there) / kind.speed
+        dh = math.fmod(heading - self.heading + _PI, _TWO_PI)  # wrap_angle, inlined (hot)
+        if dh <= 0.0:
+            dh += _TWO_PI
+        dh -= _PI
+        turn = max(abs(dh), abs(elevation - self.elevation))
         duration = move_s + turn / kind.turn_rate
         if duration == 0.0:
             duration = wait_s

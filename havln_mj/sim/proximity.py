@@ -206,9 +206,8 @@ def _samples(rows: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
         return np.array([t1]), np.array([complex(last[1], last[2])])
     n = max(2, math.ceil((t1 - t0) * SAMPLE_HZ) + 1)
     times = _linspace(t0, t1, n, [r[0] for r in rows[1:-1]])  # inner knots are samples too
-    knot_t = np.array([r[0] for r in rows])
-    knot_xy = np.array([complex(r[1], r[2]) for r in rows])
-    return times, np.interp(times, knot_t, knot_xy)
+    knot_xy = [complex(r[1], r[2]) for r in rows]
+    return times, _interp_complex(times, [r[0] for r in rows], knot_xy)
 
 
 def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> None:

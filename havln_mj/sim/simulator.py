@@ -296,14 +296,7 @@ class Simulator(SimulatorSettings, SimulatorExtensions):
                 ``ValueError``).
         """
         t0 = time.perf_counter()
-        elements = self._running()
-        n = self._cfg.batch_size
-        steps = check_graph_steps(
-            elements,
-            per_element("index", index, n),
-            per_element("heading", heading, n),
-            per_element("elevation", elevation, n),
-        )
+        steps = check_graph_steps(self._running(), index, heading, elevation)
         self._batch.apply(steps)
         self._timers["process"] += time.perf_counter() - t0
 
