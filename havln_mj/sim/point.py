@@ -45,6 +45,10 @@ class Stage:
         self, scan: Scan, options: WorldOptions, crowd: Crowd, skybox_root: str | None = None
     ) -> None:
         self.world = build_world(scan, options, crowd.shapes, crowd.skins)
+        # The compiled model holds the building now: the scan's loaded mesh (tens of MB of
+        # vertices and texture arrays) is let go, read again if a world is ever rebuilt.
+        for loaded in ("mesh_parts", "mesh"):
+            scan.__dict__.pop(loaded, None)
         self.skybox = _skybox_source(scan, skybox_root)
         self.data = mujoco.MjData(self.world.model)
         self.frames = Frames(self.world.model, crowd, options.people_style)
