@@ -199,13 +199,25 @@ def batch_proximity(
 
 
 def _samples(rows: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
-    """Sample times of a track (as :func:`sample_knots`, unordered) and its ``x + iy`` then."""
-    t0, t1 = rows[0][0], rows[-1][0]
+    """Sample times of a track (as :func:`sample_knots`, unordered) and its ``x + iy`` then.
+
+    The times are :func:`sample_knots`'s evenly spaced ones (``numpy.linspace``'s values),
+    then the inner knots.
+    """
+    first, last = rows[0], rows[-1]
+    t0, t1 = first[0], last[0]
     if len(rows) == 1 or t1 <= t0:
-        last = rows[-1]
         return np.array([t1]), np.array([complex(last[1], last[2])])
     n = max(2, math.ceil((t1 - t0) * SAMPLE_HZ) + 1)
-    times = _linspace(t0, t1, n, [r[0] for r in rows[1:-1]])  # inner knots are samples too
+    inner = len(rows) - 2
+    if n + inner > len(_STEPS):
+        times = _linspace(t0, t1, n, [r[0] for r in rows[1:-1]])
+    else:
+        times = _STEPS[: n + inner] * ((t1 - t0) / (n - 1))
+        times += t0
+        times[n - 1] = t1
+        if inner:
+            times[n:] = [r[0] for r in rows[1:-1]]  # inner knots are samples too
     knot_xy = [complex(r[1], r[2]) for r in rows]
     return times, _interp_complex(times, [r[0] for r in rows], knot_xy)
 
@@ -228,8 +240,8 @@ def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> Non
         starts = np.cumsum([0] + [len(p[0]) for p in parts[:-1]])
         earliest = min(rows[0][0] for _, rows, _ in items)
         people = sorted(set().union(*(near for _, _, near in items)))
-    # Few people: all of them (no subset to look up); many: those near.
-    who = None if table.size <= _VECTOR_NEAR else people
+    # Only those near (people farther than NEAR_M change no result).
+    who = None if len(people) == table.size else people
     gap = table.xy(times, earliest, who)  # (people, samples)
     gap -= agent
     d = np.abs(gap)
