@@ -232,17 +232,18 @@ def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> Non
     if len(items) == 1:
         _, rows, people = items[0]
         times, agent = _samples(rows)
-        earliest, starts = rows[0][0], None
+        earliest, latest, starts = rows[0][0], rows[-1][0], None
     else:
         parts = [_samples(rows) for _, rows, _ in items]
         times = np.concatenate([p[0] for p in parts])
         agent = np.concatenate([p[1] for p in parts])
         starts = np.cumsum([0] + [len(p[0]) for p in parts[:-1]])
         earliest = min(rows[0][0] for _, rows, _ in items)
+        latest = max(rows[-1][0] for _, rows, _ in items)
         people = sorted(set().union(*(near for _, _, near in items)))
     # Only those near (people farther than NEAR_M change no result).
     who = None if len(people) == table.size else people
-    gap = table.xy(times, earliest, who)  # (people, samples)
+    gap = table.xy(times, earliest, who, latest)  # (people, samples)
     gap -= agent
     d = np.abs(gap)
     if starts is None:
