@@ -206,18 +206,33 @@ def _samples(rows: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
     """
     first, last = rows[0], rows[-1]
     t0, t1 = first[0], last[0]
-    if len(rows) == 1 or t1 <= t0:
+    knots = len(rows)
+    if knots == 1 or t1 <= t0:
         return np.array([t1]), np.array([complex(last[1], last[2])])
     n = max(2, math.ceil((t1 - t0) * SAMPLE_HZ) + 1)
-    inner = len(rows) - 2
+    inner = knots - 2
     if n + inner > len(_STEPS):
-        times = _linspace(t0, t1, n, [r[0] for r in rows[1:-1]])
+        return _long_samples(rows, n)
+    times = _STEPS[: n + inner] * ((t1 - t0) / (n - 1))
+    times += t0
+    times[n - 1] = t1
+    a, b = complex(first[1], first[2]), complex(last[1], last[2])
+    # Inner knots are samples too. A point body's two or three knots are spelt out (hot).
+    if inner == 0:
+        knot_t, knot_xy = (t0, t1), (a, b)
+    elif inner == 1:
+        mid = rows[1]
+        times[n] = mid[0]
+        knot_t, knot_xy = (t0, mid[0], t1), (a, complex(mid[1], mid[2]), b)
     else:
-        times = _STEPS[: n + inner] * ((t1 - t0) / (n - 1))
-        times += t0
-        times[n - 1] = t1
-        if inner:
-            times[n:] = [r[0] for r in rows[1:-1]]  # inner knots are samples too
+        times[n:] = [r[0] for r in rows[1:-1]]
+        knot_t, knot_xy = [r[0] for r in rows], [complex(r[1], r[2]) for r in rows]
+    return times, _interp_complex(times, knot_t, knot_xy)
+
+
+def _long_samples(rows: Sequence[Sequence[float]], n: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_samples` of a long track (``n`` evenly spaced samples)."""
+    times = _linspace(rows[0][0], rows[-1][0], n, [r[0] for r in rows[1:-1]])
     knot_xy = [complex(r[1], r[2]) for r in rows]
     return times, _interp_complex(times, [r[0] for r in rows], knot_xy)
 
