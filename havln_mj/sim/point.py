@@ -33,6 +33,7 @@ from havln_mj.sim.world import WorldOptions, build_world
 log = logging.getLogger(__name__)
 _PI = math.pi
 _TWO_PI = 2.0 * math.pi
+_outcome = tuple.__new__  # an Outcome without its Python-level constructor (every move)
 
 
 class Stage:
@@ -220,7 +221,7 @@ class GraphPointBody:
         self.viewpoint, self.xyz = target, there
         self.heading, self.elevation = heading, elevation
         self._drawn = None
-        return Outcome(duration, knots, target, heading)
+        return _outcome(Outcome, (duration, knots, target, heading, True, False, False, 0, None))
 
     def _film(self, film, t0, move_s, duration, here, there, heading, elevation) -> None:
         """Draws the action's frames: along the move, then through the turn."""

@@ -296,8 +296,11 @@ class Simulator(SimulatorSettings, SimulatorExtensions):
                 ``ValueError``).
         """
         t0 = time.perf_counter()
-        steps = check_graph_steps(self._running(), index, heading, elevation)
-        self._batch.apply(steps)
+        batch = self._batch
+        if batch is None or not batch.elements:
+            self._running()  # raises
+        steps = check_graph_steps(batch.elements, index, heading, elevation)
+        batch.apply(steps)
         self._timers["process"] += time.perf_counter() - t0
 
     def makeEgoAction(self, action: Sequence[EgoAction | int | str]) -> None:  # noqa: N802
