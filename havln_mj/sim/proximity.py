@@ -177,13 +177,26 @@ def batch_proximity(
     :mod:`havln_mj.humans.tracks`) are sampled together in one vectorised pass; other crowds
     are asked for positions track by track. ``memo`` remembers who is near which track.
     """
+    reach = NEAR_M if distance <= NEAR_M else distance
+    if len(tracks) == 1:  # a batch of one: no grouping (hot)
+        crowd, knots = tracks[0]
+        rows = knots if type(knots) is tuple or type(knots) is list else _rows(knots)
+        near = memo.near(crowd, rows, reach) if memo else _near_rows(crowd, rows, reach)
+        if not near:
+            return [NO_PROXIMITY]
+        table = getattr(crowd, "pelvis_table", None)
+        if table is None:
+            times, positions = sample_knots(np.asarray(rows, float).reshape(-1, 4))
+            return [track_proximity(crowd, times, positions, distance, near)]
+        out = [NO_PROXIMITY]
+        _tabulated(table(), [(0, rows, near)], distance, out)
+        return out
     out = [NO_PROXIMITY] * len(tracks)
-    reach = max(NEAR_M, distance)
     groups: dict[int, tuple[Crowd, list]] = {}
     for slot, (crowd, knots) in enumerate(tracks):
         if not len(crowd):
             continue
-        rows = knots if isinstance(knots, tuple | list) else np.asarray(knots, float).tolist()
+        rows = knots if isinstance(knots, tuple | list) else _rows(knots)
         near = memo.near(crowd, rows, reach) if memo else _near_rows(crowd, rows, reach)
         if near:
             groups.setdefault(id(crowd), (crowd, []))[1].append((slot, rows, near))
@@ -196,6 +209,11 @@ def batch_proximity(
         else:
             _tabulated(table(), items, distance, out)
     return out
+
+
+def _rows(knots: np.ndarray) -> list[list[float]]:
+    """Knots given as an array, as rows of floats."""
+    return np.asarray(knots, float).reshape(-1, 4).tolist()
 
 
 def _samples(rows: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
