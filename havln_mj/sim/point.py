@@ -208,12 +208,13 @@ class GraphPointBody:
         duration = move_s + turn / kind.turn_rate
         if duration == 0.0:
             duration = wait_s
+        (x0, y0, z0), (x1, y1, z1) = here, there
         if move_s > 0.0 and duration > move_s:
-            knots = ((t, *here), (t + move_s, *there), (t + duration, *there))
+            knots = ((t, x0, y0, z0), (t + move_s, x1, y1, z1), (t + duration, x1, y1, z1))
         elif move_s > 0.0 or duration > 0.0:
-            knots = ((t, *here), (t + duration, *there))
+            knots = ((t, x0, y0, z0), (t + duration, x1, y1, z1))
         else:
-            knots = ((t, *here),)
+            knots = ((t, x0, y0, z0),)
         if self.observe is not ignore:
             self.observe(knots)  # people react to the move they see coming, frames included
         if film is not None:
