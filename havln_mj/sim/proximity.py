@@ -5,15 +5,17 @@ agent's base to the person's pelvis, at any time during an action. A body report
 track over the action as knots (piecewise linear: a point body's straight move then its turn
 in place, a robot's trunk at every controller tick); the track is sampled at
 :data:`SAMPLE_HZ` or faster, every knot included, so a person passing through the agent's path
-mid-action is caught. Only people whose whole pelvis track (:meth:`Crowd.footprint`) comes
-within :data:`NEAR_M` of the track are sampled; the smallest distance reported is exact below
-``NEAR_M`` and ``inf`` above.
+mid-action is caught. Only people whose whole pelvis track
+(:meth:`~havln_mj.sim.crowd.Crowd.footprint`) comes within
+:data:`~havln_mj.sim.crowd.NEAR_M` of the track are sampled; the smallest distance reported is
+exact below ``NEAR_M`` and ``inf`` above.
 
 The signal runs on every action, so it is computed as a lookup: a crowd that offers
 ``pelvis_table()`` (the humans package's does, see :mod:`havln_mj.humans.tracks`) has its
 people's pelvis tracks tabulated once and read at all of an action's samples, for all people
 and all of a batch's tracks among them, in one vectorised pass; who is near a straight track
-is remembered (:class:`NearMemo`). Other crowds are asked for :meth:`Crowd.positions`.
+is remembered (:class:`NearMemo`). Other crowds are asked for
+:meth:`~havln_mj.sim.crowd.Crowd.positions`.
 """
 
 from __future__ import annotations
@@ -259,8 +261,8 @@ def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> Non
     """The signal of ``items`` ``(slot, knots, near)`` among one crowd, read from its table.
 
     The people near any of the tracks are measured along all of them in one pass: people the
-    pruning left out of a track are farther than :data:`NEAR_M` from it, so measuring them
-    changes neither its flags nor its reported distance.
+    pruning left out of a track are farther than :data:`~havln_mj.sim.crowd.NEAR_M` from it,
+    so measuring them changes neither its flags nor its reported distance.
     """
     if len(items) == 1:
         _, rows, people = items[0]
