@@ -142,6 +142,13 @@ def _class_typehints(app, what: str, name: str, obj: object, *_: object) -> None
             recorded[param] = stringify_annotation(hint, "smart")
 
 
+def _skip_tuple_fields(app, what: str, name: str, obj: object, skip: bool, *_: object):
+    """Leaves a NamedTuple's field accessors out: its ``Attributes:`` section documents them."""
+    if type(obj).__name__ == "_tuplegetter":
+        return True
+    return None
+
+
 def _purge(app, env, docname: str) -> None:
     """Forgets what a page claimed before it is read again."""
     for pages in env.domaindata.get("havln_modules", {}).values():
@@ -153,6 +160,7 @@ def setup(app) -> dict:
     """Registers the reference directive and the coverage check."""
     app.add_directive("havln-modules", HavlnModules)
     app.connect("autodoc-process-signature", _class_typehints, priority=600)
+    app.connect("autodoc-skip-member", _skip_tuple_fields)
     app.connect("env-purge-doc", _purge)
     app.connect("env-check-consistency", _check_coverage)
     return {"parallel_read_safe": False}

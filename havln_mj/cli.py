@@ -27,7 +27,10 @@ from collections.abc import Sequence
 
 COMMANDS: dict[str, tuple[str, str]] = {
     "run": ("havln_mj.run", "build a scene and walk episodes through it on camera"),
-    "eval": ("havln_mj.eval.run", "score an agent or expert on a split (Ray: --workers N)"),
+    "eval": (
+        "havln_mj.commands.evaluate",
+        "score an agent or expert on a split (Ray: --workers N)",
+    ),
     "view": ("havln_mj.viewer", "the live MuJoCo viewer with keyboard control of the agent"),
     "train": ("havln_mj.agents.train.cli", "train VLN-CM or VLN-DT from a config"),
     "featurize": ("havln_mj.agents.featurize", "render and encode views for the agents"),

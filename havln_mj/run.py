@@ -147,6 +147,16 @@ PROG = "python -m havln_mj.run"
 def parser(prog: str = PROG) -> argparse.ArgumentParser:
     """The command's argument parser."""
     p = argparse.ArgumentParser(prog=prog, description=__doc__.splitlines()[0])
+    _add_run_flags(p)
+    _add_view_flags(p)
+    _add_people_flags(p)
+    _add_robot_flags(p)
+    _add_data_flags(p)
+    return p
+
+
+def _add_run_flags(p: argparse.ArgumentParser) -> None:
+    """Which scene, how many episodes, where the outputs go."""
     p.add_argument(
         "--scene",
         default=None,
@@ -157,6 +167,10 @@ def parser(prog: str = PROG) -> argparse.ArgumentParser:
     p.add_argument(
         "--out", type=Path, default=None, help="output folder (default ./havln_runs/<scene>)"
     )
+
+
+def _add_view_flags(p: argparse.ArgumentParser) -> None:
+    """The pictures, the video and the map's collision geometry."""
     p.add_argument("--width", type=int, default=640, help="image width, pixels (default 640)")
     p.add_argument("--height", type=int, default=480, help="image height, pixels (default 480)")
     p.add_argument("--vfov", type=float, default=60.0, help="vertical field of view, degrees")
@@ -167,6 +181,10 @@ def parser(prog: str = PROG) -> argparse.ArgumentParser:
         default="auto",
         help="collision geometry for the map's walkable area (default auto)",
     )
+
+
+def _add_people_flags(p: argparse.ArgumentParser) -> None:
+    """The people in the scene and how they are drawn."""
     p.add_argument("--no-people", action="store_true", help="leave the scene empty")
     p.add_argument(
         "--together",
@@ -185,6 +203,10 @@ def parser(prog: str = PROG) -> argparse.ArgumentParser:
         default="pieces",
         help="how people are drawn (default pieces: dressed bodies, fastest)",
     )
+
+
+def _add_robot_flags(p: argparse.ArgumentParser) -> None:
+    """The GO1 run beside the point agent."""
     p.add_argument(
         "--robot",
         choices=("point", "go1"),
@@ -203,6 +225,10 @@ def parser(prog: str = PROG) -> argparse.ArgumentParser:
         default=None,
         help="raise the GO1's camera on a mast to this height (m); default: its head camera",
     )
+
+
+def _add_data_flags(p: argparse.ArgumentParser) -> None:
+    """Where the licensed data is (each defaults to an environment variable)."""
     p.add_argument(
         "--human-placements",
         type=Path,
@@ -233,7 +259,6 @@ def parser(prog: str = PROG) -> argparse.ArgumentParser:
         default=None,
         help="folder of <scan>_connectivity.json graphs (default $HAVLN_CONNECTIVITY_DIR)",
     )
-    return p
 
 
 def parse_args(argv: Sequence[str] | None, prog: str = PROG) -> argparse.Namespace:

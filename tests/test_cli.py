@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 from havln_mj.cli import main
 from havln_mj.scene.scan import scans_dir
 from havln_mj.tasks.datasets import load_dataset
@@ -87,3 +90,11 @@ def test_the_command_dispatches_and_names_what_is_valid(capsys):
         except SystemExit as exc:
             assert exc.code == 0
         assert f"usage: havln_mj {name}" in capsys.readouterr().out
+
+
+def test_python_dash_m_runs_the_command():
+    done = subprocess.run(
+        [sys.executable, "-m", "havln_mj", "eval", "--help"], capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr
+    assert "usage: havln_mj eval" in done.stdout

@@ -10,6 +10,7 @@ MJCF with its meshes and textures (see :mod:`havln_mj.sim.export`).
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 from collections.abc import Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
@@ -72,6 +73,18 @@ def _report(scene: str, future: Future) -> int:
     return 1
 
 
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
+
+
+def _stop_on_terminate() -> None:
+    """Makes a build worker clean up on SIGTERM as on Ctrl-C.
+
+    A pool whose worker died terminates the others; without this their staging folders stay.
+    """
+    signal.signal(signal.SIGTERM, _interrupt)
+
+
 def scenes_build(args: argparse.Namespace) -> int:
     """Builds the scenes in parallel with a progress bar; prints one line per scene.
 
@@ -85,7 +98,7 @@ def scenes_build(args: argparse.Namespace) -> int:
     if note:
         print(note, file=sys.stderr)
     failures = 0
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    with ProcessPoolExecutor(max_workers=workers, initializer=_stop_on_terminate) as pool:
         futures = {
             pool.submit(build_scene, s, args.mp3d_dir, args.connectivity_dir, args.collision): s
             for s in ids

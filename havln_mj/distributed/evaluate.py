@@ -1,133 +1,21 @@
-"""Evaluation sharded over Ray actors: ``havln_mj eval --workers N [--address ADDR]``.
+"""``python -m havln_mj.distributed.evaluate``: ``havln_mj eval`` with two Ray workers by default.
 
-``--workers`` Ray actors each own a ``Simulator`` built like the single-process one;
-``--address`` picks the cluster (default a local Ray; ``auto``: the running cluster;
-``ray://host:10001``: Ray Client). ``python -m havln_mj.distributed.evaluate`` is the same
-command with two workers unless told otherwise. The instructions are cut
-into contiguous shards, run on the actors, merged back in the original order and scored
-once in the driver with the same :class:`~havln_mj.tasks.metrics.evaluator.Evaluator`, so the
-per-instruction metrics and the summary equal :func:`havln_mj.eval.run.evaluate_split`'s
-(only ``seconds`` and ``instructions_per_s`` differ).
-
-Caveat: ``evaluate_split`` draws every ``random`` agent from one generator in instruction
-order, which shards cannot reproduce; here instruction ``i`` gets its own generator
-``default_rng([seed, i])``, so ``random`` results are deterministic for any ``--workers`` but
-differ from the single-process run. The other built-in agents use no generator and match.
+:func:`evaluate_split_ray` (:mod:`havln_mj.distributed.sharded`) is the sharded evaluation.
 """
 
 from __future__ import annotations
 
-import argparse
-import itertools
 import sys
-import time
 from collections.abc import Sequence
 
-from havln_mj.distributed._ray import ensure_ray
-from havln_mj.errors import InvalidArgumentError
-from havln_mj.eval.run import run_instruction, score_split
-from havln_mj.eval.setup import evaluation_simulator, make_agent, people_report, protocol_of
-from havln_mj.tasks.episodes import Episode
+from havln_mj.commands.evaluate import main as eval_main
+from havln_mj.distributed.sharded import evaluate_split_ray
 
-
-class ShardRunner:
-    """A Ray actor's state: one simulator, running shards of instructions."""
-
-    def __init__(self, args: argparse.Namespace) -> None:
-        self._args = args
-        self._sim = evaluation_simulator(args)
-        self._make = make_agent(args.agent, args)
-        self._protocol = protocol_of(args)
-
-    def run(self, items: list[tuple[int, Episode, int]]) -> list[dict]:
-        """Runs ``(index, episode, k)`` items; one ``instructions.jsonl`` record per item."""
-        return [
-            run_instruction(self._sim, episode, k, index, self._make, self._args, self._protocol)
-            for index, episode, k in items
-        ]
-
-    def close(self) -> None:
-        """Closes the simulator."""
-        self._sim.close()
-
-
-def _shards(n: int, workers: int) -> list[range]:
-    """``range(n)`` cut into at most ``workers`` contiguous, nearly equal, non-empty pieces."""
-    workers = max(1, min(workers, n))
-    bounds = [round(i * n / workers) for i in range(workers + 1)]
-    return [range(a, b) for a, b in itertools.pairwise(bounds) if b > a]
-
-
-def evaluate_split_ray(
-    args: argparse.Namespace,
-    episodes: list[Episode],
-    split: str,
-    workers: int = 2,
-    address: str | None = None,
-) -> dict:
-    """:func:`havln_mj.eval.run.evaluate_split` with the instructions run on Ray actors.
-
-    Args:
-        args: The arguments of ``python -m havln_mj.eval`` (see its ``parse_args``).
-        episodes: The split's episodes.
-        split: The split's name in the report.
-        workers: Ray actors (one CPU and one simulator each).
-        address: Ray address (None: local; ``"auto"``; ``"ray://host:port"``); ignored when
-            Ray is already initialised.
-
-    Returns:
-        ``{"summary", "episodes", "submission"}`` as ``evaluate_split`` returns them.
-    """
-    if workers < 1:
-        raise InvalidArgumentError(f"workers must be >= 1, got {workers}")
-    if workers > 1 and protocol_of(args).name == "ha3d":
-        # HA3D's people run on one frame counter shared by every episode in order: shards on
-        # separate actors would each start it afresh and score different people.
-        raise InvalidArgumentError(
-            "--protocol ha3d needs --workers 1 (HA3D's human clock is shared by all episodes "
-            "in order); use the strict protocol to shard"
-        )
-    make_agent(args.agent)  # fail in the driver on a bad agent
-    ray = ensure_ray(address)
-    items = [
-        (i, episode, k)
-        for i, (episode, k) in enumerate(
-            (e, k) for e in episodes for k in range(len(e.instructions))
-        )
-    ]
-    t0 = time.perf_counter()
-    records: list[dict] = []
-    if items:
-        actor_cls = ray.remote(num_cpus=1)(ShardRunner)
-        shards = _shards(len(items), workers)
-        actors = [actor_cls.remote(args) for _ in shards]
-        try:
-            futures = [
-                a.run.remote([items[i] for i in shard])
-                for a, shard in zip(actors, shards, strict=True)
-            ]
-            records = [r for part in ray.get(futures) for r in part]
-        finally:
-            for a in actors:
-                ray.kill(a)
-    records.sort(key=lambda r: r["index"])
-    seconds = time.perf_counter() - t0
-    sim = evaluation_simulator(args)  # the driver's graphs and people for scoring
-    try:
-        report = score_split(args, episodes, split, records, sim, people_report(sim, episodes))
-    finally:
-        sim.close()
-    n = len(records)
-    report["summary"].update(
-        seconds=round(seconds, 2), instructions_per_s=round(n / seconds, 1) if seconds > 0 else None
-    )
-    return report
+__all__ = ["evaluate_split_ray", "main"]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """``havln_mj eval`` on Ray actors: its arguments, with ``--workers`` 2 unless given."""
-    from havln_mj.eval.run import main as eval_main
-
     argv = list(sys.argv[1:] if argv is None else argv)
     if not any(a == "--workers" or a.startswith("--workers=") for a in argv):
         argv = ["--workers", "2", *argv]

@@ -1,7 +1,7 @@
-"""``python -m havln_mj.eval`` (see :mod:`havln_mj.eval.run`)."""
+"""``python -m havln_mj.eval`` (see :mod:`havln_mj.commands.evaluate`)."""
 
 import sys
 
-from havln_mj.eval.run import main
+from havln_mj.commands.evaluate import main
 
 sys.exit(main())

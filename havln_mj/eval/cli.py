@@ -43,6 +43,15 @@ PROG = "python -m havln_mj.eval"
 def parser(prog: str = PROG) -> argparse.ArgumentParser:
     """The command's argument parser."""
     p = argparse.ArgumentParser(prog=prog, description=DESCRIPTION)
+    _add_episode_flags(p)
+    _add_agent_flags(p)
+    _add_world_flags(p)
+    _add_output_flags(p)
+    return p
+
+
+def _add_episode_flags(p: argparse.ArgumentParser) -> None:
+    """Which episodes: a dataset or procedural scenes."""
     src = p.add_mutually_exclusive_group(required=True)
     src.add_argument("--dataset", nargs="+", help="R2R/HA-R2R JSON files or split names")
     src.add_argument(
@@ -53,6 +62,10 @@ def parser(prog: str = PROG) -> argparse.ArgumentParser:
     p.add_argument(
         "--skip", type=int, default=0, help="leave out each scene's first paths (val_seen; ≥ 0)"
     )
+
+
+def _add_agent_flags(p: argparse.ArgumentParser) -> None:
+    """The agent, its body and the scoring protocol."""
     p.add_argument(
         "--agent",
         default="shortest",
@@ -83,6 +96,10 @@ def parser(prog: str = PROG) -> argparse.ArgumentParser:
         default=None,
         help="collisions per step (HA3D) or per visited viewpoint (default: step)",
     )
+
+
+def _add_world_flags(p: argparse.ArgumentParser) -> None:
+    """The people and where the scans' data is."""
     p.add_argument("--seed", type=int, default=0, help="seed of people and random agents (≥ 0)")
     p.add_argument("--no-people", action="store_true", help="evaluate without people")
     p.add_argument(
@@ -105,6 +122,10 @@ def parser(prog: str = PROG) -> argparse.ArgumentParser:
     p.add_argument(
         "--data-dir", type=_existing_dir, default=None, help="folder with r2r/ and ha_r2r/"
     )
+
+
+def _add_output_flags(p: argparse.ArgumentParser) -> None:
+    """Outputs, resuming and parallelism."""
     p.add_argument(
         "--out", type=Path, default=Path("havln_eval"), help="output folder (default havln_eval)"
     )
@@ -135,7 +156,6 @@ def parser(prog: str = PROG) -> argparse.ArgumentParser:
         default=None,
         help="Ray cluster: auto, ray://host:10001 (default: a local Ray when --workers > 1)",
     )
-    return p
 
 
 def parse_args(argv: Sequence[str] | None, prog: str = PROG) -> argparse.Namespace:

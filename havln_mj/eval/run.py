@@ -50,8 +50,7 @@ import numpy as np
 from tqdm import tqdm
 
 from havln_mj.errors import HavlnError
-from havln_mj.eval.cli import PROG, load_splits, parse_args, settings
-from havln_mj.eval.cli import parser as parser  # the eval command's, with its main here
+from havln_mj.eval.cli import load_splits, parse_args, settings
 from havln_mj.eval.outputs import RECORDINGS, Outputs
 from havln_mj.eval.setup import (
     EXPERTS,
@@ -70,7 +69,7 @@ from havln_mj.tasks.experts import run_expert
 from havln_mj.tasks.metrics import EvalEpisode, Evaluator
 from havln_mj.tasks.protocol import TaskProtocol
 
-__all__ = ["evaluate_split", "main", "make_agent", "parse_args", "run_cli", "score_split"]
+__all__ = ["evaluate_split", "make_agent", "parse_args", "run_cli", "score_split"]
 
 
 TABLE = (("NE", "ne"), ("TCR", "tcr"), ("CR", "cr"), ("SR", "sr"))
@@ -306,20 +305,3 @@ def run_cli(args: argparse.Namespace, evaluate: SplitRunner = evaluate_split) ->
     print(table)
     print(json.dumps(summaries, indent=1))
     return 0
-
-
-def main(argv: Sequence[str] | None = None, prog: str = PROG) -> int:
-    """Entry point; returns the process exit code.
-
-    With ``--workers`` above 1 or an ``--address``, the instructions run on Ray actors
-    (:mod:`havln_mj.distributed.evaluate`); the scores equal a single process's.
-    """
-    args = parse_args(argv, prog)
-    if args.workers > 1 or args.address is not None:
-        from havln_mj.distributed.evaluate import evaluate_split_ray  # the Ray extra
-
-        def sharded(a, episodes, split: str) -> dict:
-            return evaluate_split_ray(a, episodes, split, workers=a.workers, address=a.address)
-
-        return run_cli(args, sharded)
-    return run_cli(args)

@@ -64,6 +64,30 @@ class Piece:
     part: str = "top"
 
 
+_O = (0.0, 0.0, 0.0)
+# The trunk's capsules, in order: (joint, from (None: the joint), to, radius / height,
+# scaled by girth, part). Hip girdle, lower back, belly, chest, shoulder girdle, neck.
+_TRUNK = (
+    ("pelvis", "left_hip", "right_hip", 0.056, True, "bottom"),
+    ("pelvis", None, "spine1", 0.052, True, "top"),
+    ("spine1", None, "spine2", 0.050, True, "top"),
+    ("spine2", None, "spine3", 0.054, True, "top"),
+    ("spine3", None, "neck", 0.052, True, "top"),
+    ("spine3", "left_collar", "right_collar", 0.040, True, "top"),
+    ("neck", None, "head", 0.026, False, "skin"),
+)
+# Each side's limb capsules from a joint to the next: (joint, to, radius / height, scaled by
+# girth, part).
+_LIMBS = (
+    ("collar", "shoulder", 0.034, True, "top"),
+    ("shoulder", "elbow", 0.029, True, "top"),
+    ("elbow", "wrist", 0.023, True, "skin"),
+    ("wrist", "hand", 0.019, False, "skin"),
+    ("hip", "knee", 0.038, True, "bottom"),
+    ("knee", "ankle", 0.030, True, "bottom"),
+)
+
+
 @dataclass(frozen=True)
 class BodyShape:
     """A person's size and look.
@@ -110,86 +134,41 @@ class BodyShape:
 
     def pieces(self) -> list[Piece]:
         """The body's geoms, each in its joint's frame."""
-        h, g = self.height, self.girth
-        off = self.offsets
+        h, off = self.height, self.offsets
+        out = [self._capsule(off, *row) for row in _TRUNK]
+        out.append(
+            Piece(JOINT["head"], "sphere", (0.060 * h,), (0.0, 0.008 * h, 0.040 * h), _O, "skin")
+        )
+        for side in ("left", "right"):
+            out += [
+                self._capsule(off, f"{side}_{joint}", None, f"{side}_{end}", *rest)
+                for joint, end, *rest in _LIMBS
+            ]
+            out.append(self._foot(side))
+        return out
+
+    def _capsule(
+        self,
+        off: np.ndarray,
+        joint: str,
+        start: str | None,
+        end: str,
+        radius: float,
+        girth: bool,
+        part: str,
+    ) -> Piece:
+        """A capsule in ``joint``'s frame from ``start``'s origin (None: the joint's) to ``end``'s.
+
+        ``radius`` is a fraction of height, times the girth when ``girth``.
+        """
 
         def to(child: str) -> tuple[float, float, float]:
             return tuple(float(v) for v in off[JOINT[child]])
 
-        o = (0.0, 0.0, 0.0)
-        out = [
-            # Trunk: hip girdle, lower back, belly, chest and shoulder girdle.
-            Piece(
-                JOINT["pelvis"],
-                "capsule",
-                (0.056 * h * g,),
-                to("left_hip"),
-                to("right_hip"),
-                "bottom",
-            ),
-            Piece(JOINT["pelvis"], "capsule", (0.052 * h * g,), o, to("spine1"), "top"),
-            Piece(JOINT["spine1"], "capsule", (0.050 * h * g,), o, to("spine2"), "top"),
-            Piece(JOINT["spine2"], "capsule", (0.054 * h * g,), o, to("spine3"), "top"),
-            Piece(JOINT["spine3"], "capsule", (0.052 * h * g,), o, to("neck"), "top"),
-            Piece(
-                JOINT["spine3"],
-                "capsule",
-                (0.040 * h * g,),
-                to("left_collar"),
-                to("right_collar"),
-                "top",
-            ),
-            Piece(JOINT["neck"], "capsule", (0.026 * h,), o, to("head"), "skin"),
-            Piece(JOINT["head"], "sphere", (0.060 * h,), (0.0, 0.008 * h, 0.040 * h), o, "skin"),
-        ]
-        for side in ("left", "right"):
-            out += [
-                Piece(
-                    JOINT[f"{side}_collar"],
-                    "capsule",
-                    (0.034 * h * g,),
-                    o,
-                    to(f"{side}_shoulder"),
-                    "top",
-                ),
-                Piece(
-                    JOINT[f"{side}_shoulder"],
-                    "capsule",
-                    (0.029 * h * g,),
-                    o,
-                    to(f"{side}_elbow"),
-                    "top",
-                ),
-                Piece(
-                    JOINT[f"{side}_elbow"],
-                    "capsule",
-                    (0.023 * h * g,),
-                    o,
-                    to(f"{side}_wrist"),
-                    "skin",
-                ),
-                Piece(
-                    JOINT[f"{side}_wrist"], "capsule", (0.019 * h,), o, to(f"{side}_hand"), "skin"
-                ),
-                Piece(
-                    JOINT[f"{side}_hip"],
-                    "capsule",
-                    (0.038 * h * g,),
-                    o,
-                    to(f"{side}_knee"),
-                    "bottom",
-                ),
-                Piece(
-                    JOINT[f"{side}_knee"],
-                    "capsule",
-                    (0.030 * h * g,),
-                    o,
-                    to(f"{side}_ankle"),
-                    "bottom",
-                ),
-                self._foot(side),
-            ]
-        return out
+        r = radius * self.height * self.girth if girth else radius * self.height
+        return Piece(
+            JOINT[joint], "capsule", (r,), _O if start is None else to(start), to(end), part
+        )
 
     def _foot(self, side: str) -> Piece:
         """A shoe: a box from behind the heel to past the toe joint, its sole on the floor."""

@@ -40,18 +40,24 @@ from __future__ import annotations
 
 import contextlib
 import math
-import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
-from havln_mj.errors import ClosedError, InvalidArgumentError, did_you_mean
+from havln_mj.errors import ClosedError, InvalidArgumentError
 from havln_mj.render import gl
+from havln_mj.render.camera_checks import (
+    MAX_SIZE,
+    camera_id,
+    check_groups,
+    check_msaa,
+    check_size,
+    check_vfov,
+)
 
-MAX_SIZE = 8192
-"""Largest accepted image width or height, in pixels."""
+__all__ = ["FAR_M", "MAX_SIZE", "NEAR_M", "Camera", "Frame"]
 
 NEAR_M = 0.04
 """Near clipping distance in metres."""
@@ -59,10 +65,6 @@ NEAR_M = 0.04
 FAR_M = 100.0
 """Far clipping distance in metres; nothing farther is drawn and its depth reads 0."""
 
-MAX_MSAA_SAMPLES = 16
-"""Largest accepted ``msaa_samples``."""
-
-_NGROUP = int(mujoco.mjNGROUP)
 _CATMASK = int(mujoco.mjtCatBit.mjCAT_STATIC) | int(mujoco.mjtCatBit.mjCAT_DYNAMIC)
 _OFFSCREEN = int(mujoco.mjtFramebuffer.mjFB_OFFSCREEN)
 
@@ -79,52 +81,6 @@ class Frame:
 
     rgb: np.ndarray | None
     depth: np.ndarray | None
-
-
-def _check_size(name: str, value: object) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise InvalidArgumentError(f"{name} must be an int, got {value!r}")
-    if not 1 <= int(value) <= MAX_SIZE:
-        raise InvalidArgumentError(f"{name} must be in [1, {MAX_SIZE}], got {value!r}")
-    return int(value)
-
-
-def _check_vfov(value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, numbers.Real):
-        raise InvalidArgumentError(f"vfov_deg must be a number, got {value!r}")
-    deg = float(value)
-    if not (math.isfinite(deg) and 0.0 < deg < 180.0):
-        raise InvalidArgumentError(f"vfov_deg must be in (0, 180) degrees, got {value!r}")
-    return deg
-
-
-def _camera_id(model: mujoco.MjModel, camera: object) -> int:
-    names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_CAMERA, i) for i in range(model.ncam)]
-    if not isinstance(camera, str):
-        raise InvalidArgumentError(f"camera must be a camera name (str), got {camera!r}")
-    cam_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera)
-    if cam_id < 0:
-        valid = ", ".join(repr(n) for n in names if n) or "none (the model has no named camera)"
-        raise InvalidArgumentError(
-            f"Unknown camera {camera!r}; valid cameras: {valid}."
-            f"{did_you_mean(camera, [n for n in names if n])}"
-        )
-    return cam_id
-
-
-def _check_groups(groups: Sequence[int] | None) -> list[int] | None:
-    if groups is None:
-        return None
-    if isinstance(groups, str | bytes) or not isinstance(groups, Sequence):
-        raise InvalidArgumentError(f"geom_groups must be a sequence of ints, got {groups!r}")
-    out = []
-    for g in groups:
-        if isinstance(g, bool) or not isinstance(g, numbers.Integral) or not 0 <= g < _NGROUP:
-            raise InvalidArgumentError(
-                f"geom_groups entries must be ints in [0, {_NGROUP - 1}], got {g!r} in {groups!r}"
-            )
-        out.append(int(g))
-    return out
 
 
 class Camera:
@@ -154,8 +110,8 @@ class Camera:
         Args:
             model: The compiled model. Modified as the module docstring describes.
             camera: Name of a camera in ``model``.
-            width: Image width in pixels, in [1, :data:`MAX_SIZE`].
-            height: Image height in pixels, in [1, :data:`MAX_SIZE`].
+            width: Image width in pixels, in [1, :data:`~havln_mj.render.camera_checks.MAX_SIZE`].
+            height: Image height in pixels, in [1, :data:`~havln_mj.render.camera_checks.MAX_SIZE`].
             vfov_deg: Vertical field of view in degrees, in (0, 180).
             shadows: Whether lights cast shadows.
             reflections: Whether reflective materials reflect.
@@ -176,33 +132,18 @@ class Camera:
 
         if not isinstance(model, mujoco.MjModel):
             raise InvalidArgumentError(f"model must be a mujoco.MjModel, got {type(model)!r}")
-        self._width = _check_size("width", width)
-        self._height = _check_size("height", height)
-        self._vfov = _check_vfov(vfov_deg)
-        self._cam_id = _camera_id(model, camera)
+        self._width = check_size("width", width)
+        self._height = check_size("height", height)
+        self._vfov = check_vfov(vfov_deg)
+        self._cam_id = camera_id(model, camera)
         if int(model.cam_projection[self._cam_id]) != int(mujoco.mjtProjection.mjPROJ_PERSPECTIVE):
             raise InvalidArgumentError(f"camera {camera!r} is orthographic; need perspective")
-        groups = _check_groups(geom_groups)
-        if (
-            isinstance(msaa_samples, bool)
-            or not isinstance(msaa_samples, numbers.Integral)
-            or not 0 <= msaa_samples <= MAX_MSAA_SAMPLES
-        ):
-            raise InvalidArgumentError(
-                f"msaa_samples must be an int in [0, {MAX_MSAA_SAMPLES}], got {msaa_samples!r}"
-            )
+        groups = check_groups(geom_groups)
+        msaa_samples = check_msaa(msaa_samples)
         self._model = model
         self._camera_name = camera
 
-        # Model-level settings MuJoCo reads when making the context and the scene.
-        vis = model.vis
-        vis.global_.offwidth = max(int(vis.global_.offwidth), self._width)
-        vis.global_.offheight = max(int(vis.global_.offheight), self._height)
-        extent = float(model.stat.extent) or 1.0
-        vis.map.znear = NEAR_M / extent
-        vis.map.zfar = FAR_M / extent
-        model.cam_sensorsize[self._cam_id] = 0.0  # Use fovy, not intrinsics.
-        model.cam_fovy[self._cam_id] = self._vfov
+        self._fit_model()
 
         self._option = mujoco.MjvOption()
         if groups is not None:
@@ -222,18 +163,34 @@ class Camera:
         self._handle = gl.acquire(self._width, self._height, on_exit=self.close)
         self._closed = False
         try:
-            self._handle.make_current()
-            samples = int(vis.quality.offsamples)
-            vis.quality.offsamples = int(msaa_samples)
-            try:
-                self._ctx = mujoco.MjrContext(model, int(mujoco.mjtFontScale.mjFONTSCALE_50))
-            finally:
-                vis.quality.offsamples = samples
-            mujoco.mjr_setBuffer(_OFFSCREEN, self._ctx)
-            self._ctx.readDepthMap = int(mujoco.mjtDepthMap.mjDEPTH_ZEROFAR)
+            self._make_context(msaa_samples)
         except BaseException:
             self.close()
             raise
+
+    def _fit_model(self) -> None:
+        """Model-level settings MuJoCo reads when making the context and the scene."""
+        model, vis = self._model, self._model.vis
+        vis.global_.offwidth = max(int(vis.global_.offwidth), self._width)
+        vis.global_.offheight = max(int(vis.global_.offheight), self._height)
+        extent = float(model.stat.extent) or 1.0
+        vis.map.znear = NEAR_M / extent
+        vis.map.zfar = FAR_M / extent
+        model.cam_sensorsize[self._cam_id] = 0.0  # Use fovy, not intrinsics.
+        model.cam_fovy[self._cam_id] = self._vfov
+
+    def _make_context(self, msaa_samples: int) -> None:
+        """The MuJoCo render context on the shared GL context, reading depth 0 at far."""
+        vis = self._model.vis
+        self._handle.make_current()
+        samples = int(vis.quality.offsamples)
+        vis.quality.offsamples = msaa_samples
+        try:
+            self._ctx = mujoco.MjrContext(self._model, int(mujoco.mjtFontScale.mjFONTSCALE_50))
+        finally:
+            vis.quality.offsamples = samples
+        mujoco.mjr_setBuffer(_OFFSCREEN, self._ctx)
+        self._ctx.readDepthMap = int(mujoco.mjtDepthMap.mjDEPTH_ZEROFAR)
 
     # ------------------------------------------------------------------ properties
 
@@ -287,7 +244,7 @@ class Camera:
         Raises:
             InvalidArgumentError: If ``deg`` is out of range.
         """
-        self._vfov = _check_vfov(deg)
+        self._vfov = check_vfov(deg)
 
     # ------------------------------------------------------------------ rendering
 
@@ -353,7 +310,7 @@ class Camera:
         if self._closed or self._ctx is None or self._handle is None:
             raise ClosedError("render_geom_ids() called on a closed Camera")
         option = self._option
-        chosen = _check_groups(geom_groups)
+        chosen = check_groups(geom_groups)
         if chosen is not None:
             option = mujoco.MjvOption()
             option.geomgroup[:] = 0

@@ -164,23 +164,7 @@ def parse_connectivity(data: Any, source: str = "<memory>") -> Connectivity:
     seen: dict[str, int] = {}
     poses, included, visible, unobstructed, heights = [], [], [], [], []
     for i, entry in enumerate(data):
-        where = f"{source}: entry {i}"
-        if not isinstance(entry, dict):
-            raise MalformedDataError(f"{where}: expected an object, got {_json_type(entry)}")
-        missing = [f for f in FIELDS if f not in entry]
-        if missing:
-            raise MalformedDataError(
-                f"{where}: missing field(s) {', '.join(missing)}; expected {', '.join(FIELDS)}"
-            )
-        extra = [k for k in entry if k not in FIELDS]
-        if extra:
-            raise MalformedDataError(
-                f"{where}: unexpected field(s) {', '.join(map(repr, extra))}; "
-                f"expected exactly {', '.join(FIELDS)}"
-            )
-        vp = entry["image_id"]
-        if not isinstance(vp, str) or not vp:
-            raise MalformedDataError(f"{where}: image_id must be a non-empty string, got {vp!r}")
+        vp = _check_entry(entry, f"{source}: entry {i}")
         where = f"{source}: entry {i} (image_id {vp!r})"
         if vp in seen:
             raise MalformedDataError(
@@ -188,37 +172,12 @@ def parse_connectivity(data: Any, source: str = "<memory>") -> Connectivity:
             )
         seen[vp] = i
         ids.append(vp)
-
-        pose = entry["pose"]
-        if not isinstance(pose, list) or len(pose) != 16:
-            got = f"{len(pose)}" if isinstance(pose, list) else _json_type(pose)
-            raise MalformedDataError(f"{where}: pose must be 16 numbers, got {got}")
-        for k, v in enumerate(pose):
-            if not _is_finite_number(v):
-                raise MalformedDataError(f"{where}: pose[{k}] must be a finite number, got {v!r}")
-        poses.append(pose)
-
-        flag = entry["included"]
-        if not isinstance(flag, bool):
-            raise MalformedDataError(f"{where}: included must be true or false, got {flag!r}")
-        included.append(flag)
-
-        for name, rows in (("visible", visible), ("unobstructed", unobstructed)):
-            row = entry[name]
-            if not isinstance(row, list):
-                raise MalformedDataError(
-                    f"{where}: {name} must be an array of {n} booleans, got {_json_type(row)}"
-                )
-            if len(row) != n:
-                raise MalformedDataError(
-                    f"{where}: {name} has {len(row)} entries, expected {n} (one per viewpoint)"
-                )
-            rows.append(row)
-
-        height = entry["height"]
-        if not _is_finite_number(height):
-            raise MalformedDataError(f"{where}: height must be a finite number, got {height!r}")
-        heights.append(height)
+        _check_values(entry, where, n)
+        poses.append(entry["pose"])
+        included.append(entry["included"])
+        visible.append(entry["visible"])
+        unobstructed.append(entry["unobstructed"])
+        heights.append(entry["height"])
 
     pose_array = np.array(poses, dtype=np.float64).reshape(n, 4, 4)
     height_array = np.array(heights, dtype=np.float64)
@@ -232,6 +191,54 @@ def parse_connectivity(data: Any, source: str = "<memory>") -> Connectivity:
         heights=height_array,
         source=source,
     )
+
+
+def _check_entry(entry: Any, where: str) -> str:
+    """The entry's image_id, once it is an object with exactly the schema's fields."""
+    if not isinstance(entry, dict):
+        raise MalformedDataError(f"{where}: expected an object, got {_json_type(entry)}")
+    missing = [f for f in FIELDS if f not in entry]
+    if missing:
+        raise MalformedDataError(
+            f"{where}: missing field(s) {', '.join(missing)}; expected {', '.join(FIELDS)}"
+        )
+    extra = [k for k in entry if k not in FIELDS]
+    if extra:
+        raise MalformedDataError(
+            f"{where}: unexpected field(s) {', '.join(map(repr, extra))}; "
+            f"expected exactly {', '.join(FIELDS)}"
+        )
+    vp = entry["image_id"]
+    if not isinstance(vp, str) or not vp:
+        raise MalformedDataError(f"{where}: image_id must be a non-empty string, got {vp!r}")
+    return vp
+
+
+def _check_values(entry: dict, where: str, n: int) -> None:
+    """Raises for the entry's first pose, flag, row or height of the wrong type or size."""
+    pose = entry["pose"]
+    if not isinstance(pose, list) or len(pose) != 16:
+        got = f"{len(pose)}" if isinstance(pose, list) else _json_type(pose)
+        raise MalformedDataError(f"{where}: pose must be 16 numbers, got {got}")
+    for k, v in enumerate(pose):
+        if not _is_finite_number(v):
+            raise MalformedDataError(f"{where}: pose[{k}] must be a finite number, got {v!r}")
+    flag = entry["included"]
+    if not isinstance(flag, bool):
+        raise MalformedDataError(f"{where}: included must be true or false, got {flag!r}")
+    for name in ("visible", "unobstructed"):
+        row = entry[name]
+        if not isinstance(row, list):
+            raise MalformedDataError(
+                f"{where}: {name} must be an array of {n} booleans, got {_json_type(row)}"
+            )
+        if len(row) != n:
+            raise MalformedDataError(
+                f"{where}: {name} has {len(row)} entries, expected {n} (one per viewpoint)"
+            )
+    height = entry["height"]
+    if not _is_finite_number(height):
+        raise MalformedDataError(f"{where}: height must be a finite number, got {height!r}")
 
 
 def _check_geometry(poses: np.ndarray, heights: np.ndarray, ids: list[str], source: str) -> None:

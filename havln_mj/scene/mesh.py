@@ -40,6 +40,7 @@ import numpy as np
 from havln_mj.cache import atomic_write_bytes
 from havln_mj.errors import CorruptMeshError, InvalidArgumentError, MissingDataError
 from havln_mj.scene.boxes import BoxSet
+from havln_mj.scene.materials import finish_of, image_array, image_of, rgba_of
 
 if TYPE_CHECKING:
     import trimesh
@@ -179,73 +180,6 @@ def write_glb(parts: list[MeshPart], path: Path) -> None:
     atomic_write_bytes(path, scene.export(file_type="glb"))
 
 
-def _rgba_of(geom: trimesh.Trimesh) -> tuple[float, float, float, float]:
-    visual = geom.visual
-    material = getattr(visual, "material", None)
-    colour = None
-    if material is not None:
-        colour = getattr(material, "baseColorFactor", None)
-        if colour is None:
-            colour = getattr(material, "diffuse", None)
-    elif getattr(visual, "kind", None) in ("face", "vertex"):
-        colour = np.asarray(visual.face_colors, dtype=float).mean(axis=0)
-    if colour is None:
-        return (0.7, 0.7, 0.7, 1.0)
-    c = np.asarray(colour, dtype=float).ravel()
-    if c.max() > 1.0:
-        c = c / 255.0
-    if len(c) == 3:
-        c = np.append(c, 1.0)
-    return tuple(float(v) for v in c[:4])
-
-
-def _finish_of(geom: trimesh.Trimesh) -> tuple[float, float]:
-    """(shine, emission) of a glTF material (both 0 for other materials)."""
-    material = getattr(geom.visual, "material", None)
-    roughness = getattr(material, "roughnessFactor", None)
-    emissive = getattr(material, "emissiveFactor", None)
-    shine = 0.0 if roughness is None else float(np.clip(1.0 - roughness, 0.0, 1.0))
-    emission = 0.0 if emissive is None else float(np.clip(np.max(emissive), 0.0, 1.0))
-    return shine, emission
-
-
-def _image_of(geom: trimesh.Trimesh) -> Any:
-    """The material's colour image (a PIL image) when the geometry has one and UVs."""
-    visual = geom.visual
-    if getattr(visual, "kind", None) != "texture" or getattr(visual, "uv", None) is None:
-        return None
-    material = getattr(visual, "material", None)
-    image = getattr(material, "image", None)
-    if image is None:
-        image = getattr(material, "baseColorTexture", None)
-    return image
-
-
-def _image_array(image: Any, path: Path, max_size: int | None) -> np.ndarray:
-    """A PIL image as an H×W×3 uint8 RGB (or H×W×4 RGBA) array, top row first.
-
-    Images larger than ``max_size`` are shrunk by an integer factor to fit.
-    """
-    try:
-        size = max(image.size)
-        if max_size is not None and size > max_size:
-            image = image.reduce(-(-size // max_size))
-        mode = getattr(image, "mode", "RGB")
-        if mode not in ("RGB", "RGBA"):
-            image = image.convert("RGBA" if "A" in mode else "RGB")
-        array = np.asarray(image, dtype=np.uint8)
-    except Exception as exc:  # PIL raises many types for bad images
-        raise CorruptMeshError(
-            f"{path}: cannot read a texture image ({type(exc).__name__}: {exc})"
-        ) from exc
-    if array.ndim != 3 or array.shape[2] not in (3, 4) or min(array.shape[:2]) < 1:
-        raise CorruptMeshError(
-            f"{path}: texture image has shape {array.shape}, expected H×W×3 or H×W×4"
-        )
-    array.flags.writeable = False
-    return array
-
-
 def load_mesh_parts(
     path: Path, *, up: str = "z", max_texture_size: int | None = None
 ) -> list[MeshPart]:
@@ -269,6 +203,23 @@ def load_mesh_parts(
         MissingDataError: The file does not exist.
         CorruptMeshError: The file or a texture cannot be parsed, or it holds no triangles.
     """
+    scene = _read_scene(path, up, max_texture_size)
+    out = [
+        _merged(name, chunks)
+        for (name, _), chunks in _chunks(scene, path, up, max_texture_size).items()
+    ]
+    if not out:
+        raise CorruptMeshError(f"{path}: the mesh holds no triangles")
+    for part in out:
+        if not np.all(np.isfinite(part.vertices)):
+            raise CorruptMeshError(f"{path}: part {part.name!r} has non-finite vertices")
+        if part.uv is not None and not np.all(np.isfinite(part.uv)):
+            raise CorruptMeshError(f"{path}: part {part.name!r} has non-finite UVs")
+    return out
+
+
+def _read_scene(path: Path, up: str, max_texture_size: int | None) -> trimesh.Scene:
+    """The file as a trimesh scene, after checking the arguments."""
     import trimesh  # a large import: only when meshes are read or written
 
     if up not in UP_AXES:
@@ -282,9 +233,20 @@ def load_mesh_parts(
     if not path.is_file():
         raise MissingDataError(f"mesh not found: {path}")
     try:
-        scene = trimesh.load(path, force="scene", process=False)
+        return trimesh.load(path, force="scene", process=False)
     except Exception as exc:  # trimesh raises many types for bad files
         raise CorruptMeshError(f"{path}: cannot read mesh ({type(exc).__name__}: {exc})") from exc
+
+
+def _chunks(
+    scene: trimesh.Scene, path: Path, up: str, max_texture_size: int | None
+) -> dict[tuple[str, int], list]:
+    """The scene's triangles in world space, grouped by part name and texture.
+
+    Each chunk is ``(vertices, faces, uv or None, texture or None, geometry)``.
+    """
+    import trimesh
+
     by_node = scene.metadata.get("havln_mj", {}).get("parts") == "node"
     images: dict[int, np.ndarray] = {}  # id(PIL image) -> array, so shared images convert once
     same_image: dict[tuple, np.ndarray] = {}
@@ -299,7 +261,7 @@ def load_mesh_parts(
             verts = verts @ _Y_UP_TO_Z_UP.T
         material = getattr(geom.visual, "material", None)
         name = geom_name if by_node else getattr(material, "name", None) or geom_name
-        image = _image_of(geom)
+        image = image_of(geom)
         uv = None
         texture = None
         if image is not None:
@@ -310,36 +272,33 @@ def load_mesh_parts(
                 )
             texture = images.get(id(image))
             if texture is None:
-                texture = images[id(image)] = _image_array(image, path, max_texture_size)
+                texture = images[id(image)] = image_array(image, path, max_texture_size)
                 if by_node:  # glTF materials sharing an image each get their own PIL copy
                     digest = (texture.shape, hashlib.blake2b(texture.data).digest())
                     texture = images[id(image)] = same_image.setdefault(digest, texture)
         key = (name, id(texture) if texture is not None else 0)
         parts.setdefault(key, []).append((verts, np.asarray(geom.faces), uv, texture, geom))
-    out = []
-    for (name, _), chunks in parts.items():
-        offsets = np.cumsum([0] + [len(c[0]) for c in chunks[:-1]])
-        verts = np.concatenate([c[0] for c in chunks])
-        faces = np.concatenate([c[1] + o for c, o in zip(chunks, offsets, strict=True)])
-        texture = chunks[0][3]
-        uv = None if texture is None else np.concatenate([c[2] for c in chunks])
-        rgba = _rgba_of(chunks[0][4])
-        if texture is not None and not isinstance(
-            chunks[0][4].visual.material, trimesh.visual.material.PBRMaterial
-        ):
-            rgba = (1.0, 1.0, 1.0, rgba[3])  # an OBJ's Kd does not tint its map_Kd here
-        verts = verts.astype(float, copy=False)
-        shine, emission = _finish_of(chunks[0][4])
-        faces = faces.astype(np.int32, copy=False)
-        out.append(MeshPart(name, verts, faces, rgba, uv, texture, shine, emission))
-    if not out:
-        raise CorruptMeshError(f"{path}: the mesh holds no triangles")
-    for part in out:
-        if not np.all(np.isfinite(part.vertices)):
-            raise CorruptMeshError(f"{path}: part {part.name!r} has non-finite vertices")
-        if part.uv is not None and not np.all(np.isfinite(part.uv)):
-            raise CorruptMeshError(f"{path}: part {part.name!r} has non-finite UVs")
-    return out
+    return parts
+
+
+def _merged(name: str, chunks: list) -> MeshPart:
+    """One part from its chunks (see :func:`_chunks`)."""
+    import trimesh
+
+    offsets = np.cumsum([0] + [len(c[0]) for c in chunks[:-1]])
+    verts = np.concatenate([c[0] for c in chunks])
+    faces = np.concatenate([c[1] + o for c, o in zip(chunks, offsets, strict=True)])
+    texture = chunks[0][3]
+    uv = None if texture is None else np.concatenate([c[2] for c in chunks])
+    rgba = rgba_of(chunks[0][4])
+    if texture is not None and not isinstance(
+        chunks[0][4].visual.material, trimesh.visual.material.PBRMaterial
+    ):
+        rgba = (1.0, 1.0, 1.0, rgba[3])  # an OBJ's Kd does not tint its map_Kd here
+    verts = verts.astype(float, copy=False)
+    shine, emission = finish_of(chunks[0][4])
+    faces = faces.astype(np.int32, copy=False)
+    return MeshPart(name, verts, faces, rgba, uv, texture, shine, emission)
 
 
 def merge_parts(parts: list[MeshPart], name: str) -> MeshPart:

@@ -1,12 +1,13 @@
 """The Body seam: what executes the simulator's actions, and what it reports.
 
 The simulator never asks which body it drives. A :class:`BodyKind` (one per simulator:
-``"point"`` or ``"go1"``, see :data:`BODY_KINDS`) makes a :class:`Body` per batch element on
-a scan; the body starts at a viewpoint, executes graph actions (a move to a neighbour, a turn,
-a wait) and, when it has a robot's action set, the robot's continuous actions, and returns an
-:class:`Outcome`: how long the action took, where the body's base was over time (the track the
-collision signal is sampled along), where it ended, whether it arrived, fell, diverged or
-touched anyone. It draws itself through the frame pipeline (:mod:`havln_mj.sim.frame`).
+``"point"`` or ``"go1"``, see :data:`~havln_mj.sim.bodies.BODY_KINDS`) makes a :class:`Body` per
+batch element on a scan; the body starts at a viewpoint, executes graph actions (a move to a
+neighbour, a turn, a wait) and, when it has a robot's action set, the robot's continuous
+actions, and returns an :class:`Outcome`: how long the action took, where the body's base was
+over time (the track the collision signal is sampled along), where it ended, whether it arrived,
+fell, diverged or touched anyone. It draws itself through the frame pipeline
+(:mod:`havln_mj.sim.frame`).
 
 **Truth.** ``Outcome.viewpoint`` is the viewpoint the body stands at when the action ends: the
 target when the body arrived within :data:`ARRIVAL_M` of it (horizontally, on its floor),
@@ -23,7 +24,6 @@ from typing import NamedTuple, Protocol
 import mujoco
 import numpy as np
 
-from havln_mj.errors import InvalidArgumentError
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.sim.crowd import Crowd
 from havln_mj.sim.frame import View, ViewSettings
@@ -216,46 +216,3 @@ def stands_at(graph: NavGraph, vp: str, position: np.ndarray, floor_z: float) ->
     p = graph.position(vp)
     near = math.hypot(p[0] - position[0], p[1] - position[1]) <= ARRIVAL_M
     return near and abs(graph.floor_z(vp) - floor_z) <= ARRIVAL_M
-
-
-def make_kind(
-    name: str,
-    load_scan: Callable[[str], object],
-    cfg: object,
-    speed: float,
-    turn_rate: float,
-    legged: object | None,
-) -> BodyKind:
-    """The body kind called ``name`` (:data:`BODY_KINDS`) for a simulator's settings.
-
-    Args:
-        name: ``"point"`` or ``"go1"``.
-        load_scan: Loads a scan by id.
-        cfg: The simulator's :class:`~havln_mj.sim.settings.Settings`.
-        speed: The point body's speed (m/s).
-        turn_rate: The point body's turning rate (rad/s).
-        legged: The GO1's :class:`~havln_mj.sim.legged.LeggedOptions` (None: defaults).
-
-    Raises:
-        InvalidArgumentError: Unknown name, or ``legged`` of the wrong type.
-    """
-    if name == "go1":
-        from havln_mj.sim.legged import LeggedOptions  # the GO1's physics, only when used
-        from havln_mj.sim.legged_body import LeggedKind
-
-        options = legged or LeggedOptions()
-        if not isinstance(options, LeggedOptions):
-            raise InvalidArgumentError(f"legged takes LeggedOptions, got {options!r}")
-        return LeggedKind(load_scan, cfg.world_options, options)
-    if name == "point":
-        from havln_mj.sim.point import PointKind
-
-        skybox = cfg.dataset_path if cfg.skybox else None
-        return PointKind(
-            load_scan, cfg.world_options, cfg.cache_size, speed, turn_rate, skybox_root=skybox
-        )
-    raise InvalidArgumentError(f"body {name!r} unknown; valid: {', '.join(BODY_KINDS)}")
-
-
-BODY_KINDS = ("point", "go1")
-"""The bodies a simulator can have (MatterSim's point camera rig, or the simulated GO1)."""

@@ -59,7 +59,8 @@ from havln_mj.sim.actions import (
     per_element,
 )
 from havln_mj.sim.batch import WAIT_S, Batch, Element, FilmCallback
-from havln_mj.sim.body import BODY_KINDS, ROBOT_ACTIONS, BodyKind, make_kind
+from havln_mj.sim.bodies import BODY_KINDS, make_kind
+from havln_mj.sim.body import ROBOT_ACTIONS, BodyKind
 from havln_mj.sim.crowd import COLLISION_DISTANCE, Crowd
 from havln_mj.sim.crowds import CrowdBook, CrowdFactory
 from havln_mj.sim.egocentric import DEFAULT_TURN, EgoAction, ego_to_mattersim, parse_ego_action

@@ -12,8 +12,8 @@ torch = pytest.importorskip("torch")
 
 from havln_mj.agents.checkpoint import AgentBundle  # noqa: E402
 from havln_mj.agents.train import Trainer, main, read_config  # noqa: E402
+from havln_mj.commands.evaluate import main as eval_main  # noqa: E402
 from havln_mj.errors import InvalidArgumentError, MissingDataError  # noqa: E402
-from havln_mj.eval.run import main as eval_main  # noqa: E402
 
 EventAccumulator = pytest.importorskip(
     "tensorboard.backend.event_processing.event_accumulator"

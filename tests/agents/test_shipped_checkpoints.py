@@ -9,7 +9,7 @@ import pytest
 torch = pytest.importorskip("torch")
 
 from havln_mj.agents.checkpoint import AgentBundle, shipped_checkpoints  # noqa: E402
-from havln_mj.eval.run import main as eval_main  # noqa: E402
+from havln_mj.commands.evaluate import main as eval_main  # noqa: E402
 from havln_mj.paths import project_home  # noqa: E402
 
 MANIFEST = json.loads((project_home() / "agents" / "checkpoints.json").read_text())

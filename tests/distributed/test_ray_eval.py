@@ -7,7 +7,7 @@ import pytest
 ray = pytest.importorskip("ray")
 
 from havln_mj.distributed import build_scenes_ray, evaluate_split_ray  # noqa: E402
-from havln_mj.distributed.evaluate import _shards  # noqa: E402
+from havln_mj.distributed.sharded import _pieces, _shards  # noqa: E402
 from havln_mj.eval.cli import parse_args  # noqa: E402
 from havln_mj.eval.run import evaluate_split  # noqa: E402
 from havln_mj.tasks.procedural import procedural_episodes  # noqa: E402
@@ -57,6 +57,8 @@ def test_shards_cover_in_order():
     assert [list(r) for r in _shards(5, 2)] == [[0, 1], [2, 3, 4]]
     assert [list(r) for r in _shards(1, 4)] == [[0]]
     assert _shards(0, 2) == []
+    # Each shard goes to its actor in pieces, in order, for the progress bar.
+    assert [list(r) for r in _pieces(range(3, 10), 3)] == [[3, 4, 5], [6, 7, 8], [9]]
 
 
 def test_build_scenes_ray(ray_local):

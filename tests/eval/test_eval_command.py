@@ -7,11 +7,11 @@ import json
 
 import pytest
 
+from havln_mj.commands.evaluate import main
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.eval import run as eval_run
 from havln_mj.eval.cli import parse_args
 from havln_mj.eval.outputs import PROGRESS, RUN
-from havln_mj.eval.run import main
 from havln_mj.eval.setup import make_agent, metric_config
 from havln_mj.scene.scan import scans_dir
 from havln_mj.sim.rules import HumanClock

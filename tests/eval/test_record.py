@@ -6,7 +6,7 @@ import json
 
 import cv2
 
-from havln_mj.eval.run import main
+from havln_mj.commands.evaluate import main
 
 
 def test_record_writes_a_video_and_a_map_that_match_the_evaluation(tmp_path):

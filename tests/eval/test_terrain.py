@@ -51,7 +51,7 @@ def test_stair_edges_climb_more_than_the_threshold(shared_data):
 
 
 def test_eval_records_say_the_terrain_the_fall_and_the_true_distance(tmp_path):
-    from havln_mj.eval.run import main
+    from havln_mj.commands.evaluate import main
 
     out = tmp_path / "ev"
     assert main(["--scenes", "proc-0", "--per-scene", "1", "--out", str(out)]) == 0

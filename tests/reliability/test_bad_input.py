@@ -111,7 +111,9 @@ def _built(scene: str, *args) -> dict:
 def test_scenes_build_starts_no_more_workers_than_scenes_and_cpus(monkeypatch, capsys):
     asked: list[int] = []
     monkeypatch.setattr(
-        scene_commands, "ProcessPoolExecutor", lambda max_workers: _InlinePool(max_workers, asked)
+        scene_commands,
+        "ProcessPoolExecutor",
+        lambda max_workers, **_: _InlinePool(max_workers, asked),
     )
     monkeypatch.setattr(scene_commands, "build_scene", _built)
     assert cli.main(["scenes", "build", "proc-0", "--workers", "100000"]) == 0
@@ -126,7 +128,7 @@ def test_a_crash_in_one_scene_does_not_end_the_batch(monkeypatch, capsys):
         return _built(scene)
 
     monkeypatch.setattr(
-        scene_commands, "ProcessPoolExecutor", lambda max_workers: _InlinePool(max_workers, [])
+        scene_commands, "ProcessPoolExecutor", lambda max_workers, **_: _InlinePool(max_workers, [])
     )
     monkeypatch.setattr(scene_commands, "build_scene", build)
     assert cli.main(["scenes", "build", "proc-0", "proc-1", "proc-2"]) == 1

@@ -196,36 +196,52 @@ def pretrain_encoder(
     grid = tuple(rows.targets["depth"].shape[1:]) if "depth" in rows.targets else (6, 8)
     rng = np.random.default_rng(seed)
     train_idx, val_idx = _split(n, val_fraction, rng, groups)
-    steps_per_epoch = sum(len(train_idx) - s >= 2 for s in range(0, len(train_idx), batch_size))
     history: list[dict[str, float]] = []
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(seed)
         heads = PretrainHeads(encoder.out_dim, n_regions, grid).to(device_of(encoder))
-        params = list(encoder.parameters()) + list(heads.parameters())
-        opt = torch.optim.AdamW(params, lr=lr, weight_decay=weight_decay)
-        sched = _warmup_cosine(opt, max(1, steps_per_epoch * epochs))
-        step = _Step(encoder, heads, opt, sched, params, flip, loss_weights)
+        total_steps = _steps_per_epoch(len(train_idx), batch_size) * epochs
+        step = _Step.make(encoder, heads, lr, weight_decay, total_steps, flip, loss_weights)
         for epoch in range(epochs):
-            t0 = time.perf_counter()
-            encoder.train()
-            heads.train()
-            bar = tqdm(
-                total=steps_per_epoch,
-                desc=f"pretrain {epoch + 1}/{epochs}",
-                unit="batch",
-                disable=not progress,
-                leave=False,
-            )
-            means = _train_epoch(step, rows, rng.permutation(train_idx), batch_size, rng, bar)
-            bar.close()
-            record = {"epoch": epoch + 1, **{f"train_{k}": v for k, v in means.items()}}
-            if len(val_idx):
-                encoder.eval()
-                heads.eval()
-                record.update(_evaluate(encoder, heads, rows, val_idx, max(batch_size, 256)))
-            history.append({**record, "seconds": time.perf_counter() - t0})
+            desc = f"pretrain {epoch + 1}/{epochs}" if progress else None
+            record = _epoch(step, rows, (train_idx, val_idx), batch_size, rng, desc)
+            history.append({"epoch": epoch + 1, **record})
     encoder.eval()
     return history
+
+
+def _epoch(
+    step: _Step,
+    rows: _Rows,
+    split: tuple[np.ndarray, np.ndarray],
+    batch_size: int,
+    rng: np.random.Generator,
+    desc: str | None,
+) -> dict[str, float]:
+    """One training pass over a shuffled ``split[0]``, then the metrics on ``split[1]``.
+
+    Returns the ``train_<term>`` means, the validation metrics (when there are validation
+    rows) and ``seconds``. ``desc``: the progress bar's label (None: no bar).
+    """
+    train_idx, val_idx = split
+    t0 = time.perf_counter()
+    bar = tqdm(
+        total=_steps_per_epoch(len(train_idx), batch_size),
+        desc=desc,
+        unit="batch",
+        disable=desc is None,
+        leave=False,
+    )
+    step.encoder.train()
+    step.heads.train()
+    means = _train_epoch(step, rows, rng.permutation(train_idx), batch_size, rng, bar)
+    bar.close()
+    record = {f"train_{k}": v for k, v in means.items()}
+    if len(val_idx):
+        step.encoder.eval()
+        step.heads.eval()
+        record.update(_evaluate(step.encoder, step.heads, rows, val_idx, max(batch_size, 256)))
+    return {**record, "seconds": time.perf_counter() - t0}
 
 
 def _rows(
@@ -275,6 +291,28 @@ class _Step:
     params: list[nn.Parameter]
     flip: bool
     loss_weights: Mapping[str, float] | None
+
+    @classmethod
+    def make(
+        cls,
+        encoder: nn.Module,
+        heads: PretrainHeads,
+        lr: float,
+        weight_decay: float,
+        total_steps: int,
+        flip: bool,
+        loss_weights: Mapping[str, float] | None,
+    ) -> _Step:
+        """AdamW over the encoder's and heads' parameters, with :func:`_warmup_cosine`."""
+        params = list(encoder.parameters()) + list(heads.parameters())
+        opt = torch.optim.AdamW(params, lr=lr, weight_decay=weight_decay)
+        sched = _warmup_cosine(opt, max(1, total_steps))
+        return cls(encoder, heads, opt, sched, params, flip, loss_weights)
+
+
+def _steps_per_epoch(n_train: int, batch_size: int) -> int:
+    """Optimisation steps in one pass (a last batch of one row is skipped)."""
+    return sum(n_train - s >= 2 for s in range(0, n_train, batch_size))
 
 
 def _mirror(x: Tensor, t: dict[str, Tensor], rng: np.random.Generator) -> Tensor:

@@ -24,6 +24,7 @@ from havln_mj.humans.loaders.motion import (
 from havln_mj.humans.skeleton import NUM_JOINTS
 from havln_mj.humans.smpl_model import SmplModel
 
+_WHAT = "AMASS motion"
 _BODY_JOINTS = 22  # SMPL-H / SMPL-X keep the body's first 22 joints; hands are separate
 
 
@@ -55,47 +56,12 @@ def load_amass(
         MalformedDataError: The file is not an npz with the keys and shapes above.
     """
     path = check_path(path, "AMASS motion file")
-    try:
-        npz = np.load(path, allow_pickle=False)
-    except (OSError, ValueError) as exc:
-        raise MalformedDataError(f"{path}: not a readable AMASS .npz ({exc})") from exc
-    with npz:
-        data = {k: npz[k] for k in npz.files if k != "gender"}  # gender may be an object
-    what = "AMASS motion"
-    if "poses" in data:
-        poses = array(data, "poses", path, (None, None), what)
-        width = poses.shape[1]
-        if width != 3 * NUM_JOINTS and width < 3 * _BODY_JOINTS:
-            raise MalformedDataError(
-                f"{path}: 'poses' has {width} columns, expected 72 (SMPL) or ≥ 66 (SMPL-H/-X)"
-            )
-        joints = NUM_JOINTS if width == 3 * NUM_JOINTS else _BODY_JOINTS
-        aa = poses[:, : 3 * joints]
-    elif "root_orient" in data:
-        root = array(data, "root_orient", path, (None, 3), what)
-        body = array(data, "pose_body", path, (len(root), 3 * (_BODY_JOINTS - 1)), what)
-        aa = np.concatenate([root, body], axis=1)
-        joints = _BODY_JOINTS
-    else:
-        raise MalformedDataError(
-            f"{path}: AMASS motion lacks key 'poses' (or 'root_orient' + 'pose_body'); "
-            f"has {sorted(data)}"
-        )
+    data = _read_npz(path)
+    aa, joints = _axis_angles(data, path)
     n = len(aa)
-    if n == 0:
-        raise MalformedDataError(f"{path}: 'poses' has no frames")
-    trans = array(data, "trans", path, (n, 3), what)
-    rate_key = next((k for k in ("mocap_framerate", "mocap_frame_rate") if k in data), None)
-    if rate_key is None:
-        raise MalformedDataError(
-            f"{path}: AMASS motion lacks its frame rate 'mocap_framerate' (or SMPL-X "
-            f"'mocap_frame_rate'); has {sorted(data)}"
-        )
-    rate = array(data, rate_key, path, (None,) * np.ndim(data[rate_key]), what).ravel()
-    if rate.size != 1 or not rate[0] > 0:
-        raise MalformedDataError(f"{path}: {rate_key!r} = {rate}, expected one positive rate")
-    rate = float(rate[0])
-    betas = array(data, "betas", path, (None,), what) if "betas" in data else None
+    trans = array(data, "trans", path, (n, 3), _WHAT)
+    rate = _frame_rate(data, path)
+    betas = array(data, "betas", path, (None,), _WHAT) if "betas" in data else None
 
     rotations = rot.identity((n, NUM_JOINTS))
     rotations[:, :joints] = rot.from_axis_angle(aa.reshape(n, joints, 3))
@@ -112,3 +78,53 @@ def load_amass(
         name=path.stem,
         source=path,
     )
+
+
+def _read_npz(path: Path) -> dict[str, np.ndarray]:
+    """The file's arrays (all but ``gender``, which may be an object array)."""
+    try:
+        npz = np.load(path, allow_pickle=False)
+    except (OSError, ValueError) as exc:
+        raise MalformedDataError(f"{path}: not a readable AMASS .npz ({exc})") from exc
+    with npz:
+        return {k: npz[k] for k in npz.files if k != "gender"}
+
+
+def _axis_angles(data: dict[str, np.ndarray], path: Path) -> tuple[np.ndarray, int]:
+    """The ``(N, 3 * joints)`` axis-angle poses, and how many joints they rotate."""
+    if "poses" in data:
+        poses = array(data, "poses", path, (None, None), _WHAT)
+        width = poses.shape[1]
+        if width != 3 * NUM_JOINTS and width < 3 * _BODY_JOINTS:
+            raise MalformedDataError(
+                f"{path}: 'poses' has {width} columns, expected 72 (SMPL) or ≥ 66 (SMPL-H/-X)"
+            )
+        joints = NUM_JOINTS if width == 3 * NUM_JOINTS else _BODY_JOINTS
+        aa = poses[:, : 3 * joints]
+    elif "root_orient" in data:
+        root = array(data, "root_orient", path, (None, 3), _WHAT)
+        body = array(data, "pose_body", path, (len(root), 3 * (_BODY_JOINTS - 1)), _WHAT)
+        aa = np.concatenate([root, body], axis=1)
+        joints = _BODY_JOINTS
+    else:
+        raise MalformedDataError(
+            f"{path}: AMASS motion lacks key 'poses' (or 'root_orient' + 'pose_body'); "
+            f"has {sorted(data)}"
+        )
+    if len(aa) == 0:
+        raise MalformedDataError(f"{path}: 'poses' has no frames")
+    return aa, joints
+
+
+def _frame_rate(data: dict[str, np.ndarray], path: Path) -> float:
+    """The source frame rate (``mocap_framerate``, or SMPL-X's ``mocap_frame_rate``)."""
+    rate_key = next((k for k in ("mocap_framerate", "mocap_frame_rate") if k in data), None)
+    if rate_key is None:
+        raise MalformedDataError(
+            f"{path}: AMASS motion lacks its frame rate 'mocap_framerate' (or SMPL-X "
+            f"'mocap_frame_rate'); has {sorted(data)}"
+        )
+    rate = array(data, rate_key, path, (None,) * np.ndim(data[rate_key]), _WHAT).ravel()
+    if rate.size != 1 or not rate[0] > 0:
+        raise MalformedDataError(f"{path}: {rate_key!r} = {rate}, expected one positive rate")
+    return float(rate[0])

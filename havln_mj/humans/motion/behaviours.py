@@ -19,129 +19,43 @@ from havln_mj.humans import rotations as rot
 from havln_mj.humans.clip import Clip
 from havln_mj.humans.motion import joints as jt
 from havln_mj.humans.motion.gait import FPS, PHONE_ARM, GaitStyle, walk
+from havln_mj.humans.motion.posing import (
+    BOOK,
+    COUNTER,
+    GESTURE,
+    HANG,
+    OVERHEAD,
+    STANCE_X,
+    STANCE_Y,
+    THIGHS,
+    PoseBuilder,
+    check_choice,
+    check_height,
+    loop_times,
+    minjerk,
+    wave,
+)
 from havln_mj.humans.motion.route import loop_route
-from havln_mj.humans.skeleton import JOINT, MAX_HEIGHT, MIN_HEIGHT, NUM_JOINTS, rest_offsets
+from havln_mj.humans.skeleton import JOINT
 
-# Arm presets (shoulder flexion, elbow flexion, abduction, horizontal adduction), radians,
-# fitted once with forward kinematics to put the hands where the names say.
-HANG = (0.03, 0.15, 0.14, 0.0)
-THIGHS = (0.0, 1.3, 0.0, 0.1)  # seated, hands resting on the thighs
-BOOK = (0.37, 1.27, 0.1, 0.4)  # holding something in front of the chest
-GESTURE = (0.18, 1.4, 0.14, 0.13)  # forearms up, hands at chest height
-COUNTER = (0.55, 1.1, 0.1, 0.3)  # hands working at a counter in front of the waist
-OVERHEAD = (2.85, 0.15, 0.1, 0.0)
 SEAT_CLEARANCE = 0.08
 """Height of the pelvis joint above the seat when sitting, as a fraction of body height."""
 REACH_KINDS = ("up", "down", "forward")
 EXERCISE_KINDS = ("squat", "stretch", "jumping_jacks")
 SIT_POSES = ("rest", "read", "talk")
-_STANCE_X, _STANCE_Y = 0.055, -0.012  # standing feet beside the pelvis, fraction of height
 
 
-def _check_height(height: float) -> float:
-    if not (math.isfinite(height) and MIN_HEIGHT <= height <= MAX_HEIGHT):
-        raise InvalidArgumentError(
-            f"height must be in {MIN_HEIGHT}..{MAX_HEIGHT} m, got {height!r}"
-        )
-    return float(height)
-
-
-def _check_choice(what: str, value: str, valid: tuple[str, ...]) -> None:
-    if value not in valid:
-        raise InvalidArgumentError(f"unknown {what} {value!r}; valid: {', '.join(valid)}")
-
-
-def _loop_times(duration: float, least: float = 1.0) -> np.ndarray:
-    """Frame times of one loop, both ends included (a whole number of frames)."""
-    if not (math.isfinite(duration) and duration >= least):
-        raise InvalidArgumentError(f"duration must be at least {least} s, got {duration!r}")
-    return np.arange(round(duration * FPS) + 1) / FPS
-
-
-def _wave(rng: np.random.Generator, t: np.ndarray, period: float, hz: float, amp: float):
-    """A sine of about ``hz`` with a whole number of cycles per ``period`` and a random phase."""
-    cycles = max(1, round(hz * period))
-    return amp * np.sin(2 * np.pi * cycles * t / period + rng.uniform(0, 2 * np.pi))
-
-
-def _minjerk(x: np.ndarray) -> np.ndarray:
-    x = np.clip(x, 0.0, 1.0)
-    return x**3 * (10 - 15 * x + 6 * x**2)
-
-
-class _Body:
-    """A clip under construction: pelvis, trunk, head and arms by angle, legs by IK."""
-
-    def __init__(self, height: float, n: int):
-        self.height = height
-        self.offsets = rest_offsets(height)
-        self.local = np.tile(rot.identity(), (n, NUM_JOINTS, 1))
-        self.root = np.zeros((n, 3))
-        self.root[:, 2] = (0.575 - 0.005) * height  # knees soft
-        self.pelvis = rot.identity((n,))
-        self.chest = rot.identity((n,))
-
-    def set_pelvis(self, q: np.ndarray) -> None:
-        self.pelvis = np.broadcast_to(q, self.pelvis.shape).copy()
-        self.local[:, 0] = self.pelvis
-
-    def set_trunk(self, chest_world: np.ndarray, head_world: np.ndarray) -> None:
-        """World orientations of the chest and head; the spine and neck joints share the turn."""
-        self.chest = np.broadcast_to(chest_world, self.pelvis.shape)
-        jt.set_spine(self.local, rot.mul(rot.conj(self.pelvis), self.chest))
-        jt.set_neck(self.local, rot.mul(rot.conj(self.chest), head_world))
-
-    def set_arm(self, side: float, preset: tuple, **delta: np.ndarray | float) -> None:
-        """An arm at ``preset`` plus offsets, e.g. ``flex=...``, ``elbow=...``."""
-        names = ("flex", "elbow", "abduct", "across")
-        angles = [
-            np.asarray(v, float) + delta.get(k, 0.0) for k, v in zip(names, preset, strict=True)
-        ]
-        jt.set_arm(self.local, side, *angles)
-
-    def plant_feet(
-        self,
-        spread: float = _STANCE_X,
-        forward: float = _STANCE_Y,
-        pitch: np.ndarray | float = 0.0,
-        lift: np.ndarray | float = 0.0,
-    ) -> None:
-        """Feet on the floor beside the anchor (toes slightly out); legs by IK."""
-        n, h = len(self.root), self.height
-        for side in (jt.LEFT, jt.RIGHT):
-            ground = np.zeros((n, 2))
-            ground[:, 0] = side * np.asarray(spread, float) * h
-            ground[:, 1] = forward * h
-            yaw = np.full(n, -side * 0.1)
-            ankle, foot = jt.ankle_from_contact(h, ground, yaw, np.broadcast_to(pitch, n), lift)
-            self.legs(side, ankle, foot)
-
-    def legs(self, side: float, ankle: np.ndarray, foot: np.ndarray) -> None:
-        """One leg reaching ``ankle`` with the foot at ``foot``, by IK."""
-        name = "right" if side > 0 else "left"
-        hip = self.root + rot.rotate(self.pelvis, self.offsets[JOINT[f"{name}_hip"]])
-        hq, kq, aq = jt.leg_ik(self.offsets, side, hip, self.pelvis, ankle, foot)
-        self.local[:, JOINT[f"{name}_hip"]] = hq
-        self.local[:, JOINT[f"{name}_knee"]] = kq
-        self.local[:, JOINT[f"{name}_ankle"]] = aq
-
-    def clip(self, name: str, loop_start: int = 0) -> Clip:
-        return Clip(
-            self.root.copy(), FPS, local=rot.normalize(self.local), loop_start=loop_start, name=name
-        )
-
-
-def _idle_sway(body: _Body, rng: np.random.Generator, t: np.ndarray, period: float) -> None:
+def _idle_sway(body: PoseBuilder, rng: np.random.Generator, t: np.ndarray, period: float) -> None:
     """Weight shift, breathing and a wandering gaze: the base of every standing recipe."""
     h = body.height
-    shift = _wave(rng, t, period, rng.uniform(0.2, 0.3), rng.uniform(0.01, 0.02))
+    shift = wave(rng, t, period, rng.uniform(0.2, 0.3), rng.uniform(0.01, 0.02))
     body.root[:, 0] += shift
-    body.set_pelvis(jt.trunk(bend=-1.2 * shift / h, twist=_wave(rng, t, period, 0.1, 0.03)))
-    breath = _wave(rng, t, period, rng.uniform(0.22, 0.3), math.radians(1.0))
-    drift = _wave(rng, t, period, 0.12, math.radians(rng.uniform(2.0, 4.0)))
+    body.set_pelvis(jt.trunk(bend=-1.2 * shift / h, twist=wave(rng, t, period, 0.1, 0.03)))
+    breath = wave(rng, t, period, rng.uniform(0.22, 0.3), math.radians(1.0))
+    drift = wave(rng, t, period, 0.12, math.radians(rng.uniform(2.0, 4.0)))
     chest = jt.trunk(flex=0.03 - breath, bend=0.5 * drift)
-    look = _wave(rng, t, period, 0.1, math.radians(rng.uniform(3.0, 8.0)))
-    nod = _wave(rng, t, period, 0.15, math.radians(rng.uniform(2.0, 4.0)))
+    look = wave(rng, t, period, 0.1, math.radians(rng.uniform(3.0, 8.0)))
+    nod = wave(rng, t, period, 0.15, math.radians(rng.uniform(2.0, 4.0)))
     body.set_trunk(chest, jt.trunk(flex=0.05 + nod, twist=look))
 
 
@@ -153,12 +67,12 @@ def idle(height: float, rng: np.random.Generator, duration: float = 8.0) -> Clip
         rng: Source of the person's variations.
         duration: Seconds per loop (at least 2).
     """
-    h = _check_height(height)
-    t = _loop_times(duration, 2.0)
-    body = _Body(h, len(t))
+    h = check_height(height)
+    t = loop_times(duration, 2.0)
+    body = PoseBuilder(h, len(t))
     _idle_sway(body, rng, t, t[-1])
     for side in (jt.LEFT, jt.RIGHT):
-        body.set_arm(side, HANG, flex=_wave(rng, t, t[-1], 0.2, 0.03))
+        body.set_arm(side, HANG, flex=wave(rng, t, t[-1], 0.2, 0.03))
     body.plant_feet()
     return body.clip("idle")
 
@@ -174,13 +88,13 @@ def talk(
         duration: Seconds per loop (at least 2).
         phone: Hold a phone with the right hand; the left hand gestures now and then.
     """
-    h = _check_height(height)
-    t = _loop_times(duration, 2.0)
+    h = check_height(height)
+    t = loop_times(duration, 2.0)
     period = t[-1]
-    body = _Body(h, len(t))
+    body = PoseBuilder(h, len(t))
     _idle_sway(body, rng, t, period)
-    turn = _wave(rng, t, period, 0.08, math.radians(rng.uniform(8.0, 15.0)))
-    nod = _wave(rng, t, period, rng.uniform(0.6, 1.0), math.radians(3.0))
+    turn = wave(rng, t, period, 0.08, math.radians(rng.uniform(8.0, 15.0)))
+    nod = wave(rng, t, period, rng.uniform(0.6, 1.0), math.radians(3.0))
     bend = 0.12 if phone else 0.0
     body.set_trunk(body.chest, jt.trunk(flex=0.06 + nod, bend=bend, twist=turn))
     scale = rng.uniform(0.6, 1.2)
@@ -190,14 +104,13 @@ def talk(
             continue
         # Gestures come and go: a slow envelope times a quicker beat.
         env = 0.5 + 0.5 * np.sin(2 * np.pi * t / period + rng.uniform(0, 2 * np.pi))
-        beat = _wave(rng, t, period, rng.uniform(0.8, 1.5), 1.0)
+        beat = wave(rng, t, period, rng.uniform(0.8, 1.5), 1.0)
         base = GESTURE if not phone else HANG
         body.set_arm(
             side,
             base,
             flex=0.15 * scale * env * beat + (0.1 * env if phone else 0.0),
-            elbow=0.35 * scale * env * _wave(rng, t, period, 1.1, 1.0)
-            + (0.9 * env if phone else 0),
+            elbow=0.35 * scale * env * wave(rng, t, period, 1.1, 1.0) + (0.9 * env if phone else 0),
             across=0.15 * scale * env * beat,
         )
     body.plant_feet()
@@ -213,14 +126,14 @@ def reach(height: float, rng: np.random.Generator, kind: str = "up", duration: f
         kind: ``"up"``, ``"down"`` or ``"forward"`` (hands busy at waist height).
         duration: Seconds per loop (at least 4).
     """
-    h = _check_height(height)
-    _check_choice("reach kind", kind, REACH_KINDS)
-    t = _loop_times(duration, 4.0)
+    h = check_height(height)
+    check_choice("reach kind", kind, REACH_KINDS)
+    t = loop_times(duration, 4.0)
     period = t[-1]
-    body = _Body(h, len(t))
+    body = PoseBuilder(h, len(t))
     _idle_sway(body, rng, t, period)
     if kind == "forward":
-        busy = [_wave(rng, t, period, rng.uniform(1.0, 2.0), 1.0) for _ in range(3)]
+        busy = [wave(rng, t, period, rng.uniform(1.0, 2.0), 1.0) for _ in range(3)]
         body.set_trunk(
             rot.mul(body.chest, jt.trunk(flex=rng.uniform(0.1, 0.2))), jt.trunk(flex=0.45)
         )
@@ -234,7 +147,7 @@ def reach(height: float, rng: np.random.Generator, kind: str = "up", duration: f
     go, hold = rng.uniform(1.0, 1.4), rng.uniform(0.8, 1.4)
     squeeze = min(1.0, (period - 0.5) / (2 * go + hold))  # leave ≥ 0.5 s at rest
     go, hold = go * squeeze, hold * squeeze
-    e = _minjerk(t / go) - _minjerk((t - go - hold) / go)
+    e = minjerk(t / go) - minjerk((t - go - hold) / go)
     busy = 0.08 * np.sin(2 * np.pi * 1.5 * t) * np.clip(e, 0, 1) ** 4
     if kind == "up":
         both = rng.random() < 0.4
@@ -278,11 +191,11 @@ def exercise(
         kind: ``"squat"``, ``"stretch"`` or ``"jumping_jacks"``.
         duration: Seconds per loop (at least 3); whole repetitions are fitted into it.
     """
-    h = _check_height(height)
-    _check_choice("exercise kind", kind, EXERCISE_KINDS)
-    t = _loop_times(duration, 3.0)
+    h = check_height(height)
+    check_choice("exercise kind", kind, EXERCISE_KINDS)
+    t = loop_times(duration, 3.0)
     period = t[-1]
-    body = _Body(h, len(t))
+    body = PoseBuilder(h, len(t))
     if kind == "squat":
         reps = max(1, round(period / rng.uniform(2.6, 3.4)))
         e = 0.5 - 0.5 * np.cos(2 * np.pi * reps * t / period)
@@ -309,13 +222,13 @@ def exercise(
     reps = max(1, round(period / rng.uniform(1.1, 1.4)))
     ph = np.mod(reps * t / period, 1.0)
     hop = np.sin(np.pi * np.clip(np.mod(ph, 0.5) / 0.3, 0.0, 1.0))  # 0 on the ground
-    apart = np.where(ph < 0.5, _minjerk(ph / 0.3), 1.0 - _minjerk((ph - 0.5) / 0.3))
+    apart = np.where(ph < 0.5, minjerk(ph / 0.3), 1.0 - minjerk((ph - 0.5) / 0.3))
     jump, arms, wide = rng.uniform(0.02, 0.035), rng.uniform(2.3, 2.7), rng.uniform(0.06, 0.1)
     body.root[:, 2] += jump * h * hop
     for side in (jt.LEFT, jt.RIGHT):
         body.set_arm(side, HANG, abduct=arms * apart, elbow=0.2 * apart)
     body.set_trunk(rot.identity((len(t),)), jt.trunk(flex=0.05))
-    spread = _STANCE_X + wide * apart
+    spread = STANCE_X + wide * apart
     body.plant_feet(spread=spread, lift=0.025 * h * hop, pitch=-0.25 * hop)
     return body.clip("jumping_jacks")
 
@@ -342,15 +255,15 @@ def sit(
         pose: ``"rest"`` (hands on the thighs), ``"read"`` (holding something, head down)
             or ``"talk"`` (gesturing).
     """
-    h = _check_height(height)
-    _check_choice("sitting pose", pose, SIT_POSES)
+    h = check_height(height)
+    check_choice("sitting pose", pose, SIT_POSES)
     if not (math.isfinite(seat_height) and 0.15 <= seat_height <= 1.2):
         raise InvalidArgumentError(f"seat_height must be in 0.15..1.2 m, got {seat_height!r}")
     n_down = round(rng.uniform(1.6, 2.2) * FPS)
     down = n_down / FPS
-    loop = _loop_times(duration, 2.0)
+    loop = loop_times(duration, 2.0)
     t = np.arange(n_down + len(loop)) / FPS
-    body = _Body(h, len(t))
+    body = PoseBuilder(h, len(t))
     offsets = body.offsets
     reach = 0.95 * jt.leg_reach(offsets)
     hip_below = offsets[JOINT["left_hip"], 2]  # negative: hips sit below the pelvis joint
@@ -360,19 +273,19 @@ def sit(
     rise = min(seat_hip - ankle_z, reach)
     feet_y = min(0.2 * h, math.sqrt(max(reach**2 - rise**2, 0.0)))
     seated_z = ankle_z + rise - hip_below
-    stand_y = feet_y - _STANCE_Y * h
-    s = _minjerk(t / down)
-    sz = _minjerk((t / down - 0.1) / 0.9)
+    stand_y = feet_y - STANCE_Y * h
+    s = minjerk(t / down)
+    sz = minjerk((t / down - 0.1) / 0.9)
     lean = np.sin(np.pi * s) ** 1.5
     body.root[:, 1] = stand_y * (1 - s)
     body.root[:, 2] = body.root[:, 2] * (1 - sz) + seated_z * sz
     # Seated movements fade in while sitting down; they are periodic over the loop.
     sway, tl = s, t
-    breath = _wave(rng, tl, loop[-1], rng.uniform(0.22, 0.3), math.radians(1.0)) * sway
-    look = _wave(rng, tl, loop[-1], 0.1, math.radians(rng.uniform(4.0, 10.0))) * sway
+    breath = wave(rng, tl, loop[-1], rng.uniform(0.22, 0.3), math.radians(1.0)) * sway
+    look = wave(rng, tl, loop[-1], 0.1, math.radians(rng.uniform(4.0, 10.0))) * sway
     body.set_pelvis(jt.trunk(flex=0.35 * lean - 0.08 * s))
     head_flex = {"rest": 0.05, "read": 0.4, "talk": 0.05}[pose] * s
-    nod = _wave(rng, tl, loop[-1], 0.7, math.radians(3.0)) * sway * (pose == "talk")
+    nod = wave(rng, tl, loop[-1], 0.7, math.radians(3.0)) * sway * (pose == "talk")
     body.set_trunk(
         jt.trunk(flex=0.45 * lean + 0.05 * s - breath),
         jt.trunk(flex=0.1 * lean + head_flex + nod, twist=look),
@@ -385,8 +298,8 @@ def sit(
         }
         if pose == "talk":
             env = 0.5 + 0.5 * np.sin(2 * np.pi * tl / loop[-1] + rng.uniform(0, 2 * np.pi))
-            delta["flex"] = delta["flex"] + 0.12 * env * _wave(rng, tl, loop[-1], 1.0, 1.0) * sway
-            delta["elbow"] = delta["elbow"] + 0.3 * env * _wave(rng, tl, loop[-1], 1.2, 1.0) * sway
+            delta["flex"] = delta["flex"] + 0.12 * env * wave(rng, tl, loop[-1], 1.0, 1.0) * sway
+            delta["elbow"] = delta["elbow"] + 0.3 * env * wave(rng, tl, loop[-1], 1.2, 1.0) * sway
         body.set_arm(side, HANG, **delta)
     body.plant_feet(forward=feet_y / h)
     return body.clip(f"sit_{pose}", loop_start=n_down)
@@ -411,7 +324,7 @@ def walk_path(
         speed: Walking speed on straight stretches (m/s).
         closed: Whether the path returns from its last point to its first.
     """
-    h = _check_height(height)
+    h = check_height(height)
     style = GaitStyle.sample(rng)
     route = loop_route(waypoints, speed, rng, closed=closed, fps=FPS)
     return walk(route, h, style, speed, name="walk")
@@ -435,7 +348,7 @@ def pace(
         speed: Walking speed between the turns (m/s).
         phone: Talk on a phone held to the right ear while pacing.
     """
-    h = _check_height(height)
+    h = check_height(height)
     style = GaitStyle.sample(rng)
     pts = np.stack([np.asarray(a, float), np.asarray(b, float)])
     route = loop_route(pts, speed, rng, closed=False, turn_time=rng.uniform(1.1, 1.5), fps=FPS)

@@ -2,8 +2,9 @@
 
 Each course is a world spec (collision boxes in group ``COLLISION``, a floor plane at z = 0)
 climbing along +x from ``x = 0``; the robot starts on the lower landing at ``START_X`` facing +x
-(heading π/2) or on the upper landing facing −x. :func:`course_spec` returns the spec and the
-:class:`Course` facts a benchmark needs (where the flight starts and ends, how high it climbs).
+(heading π/2) or on the upper landing facing −x. :func:`stairs_spec` and :func:`ramp_spec`
+return the spec and the :class:`Course` facts a benchmark needs (where the flight starts and
+ends, how high it climbs).
 """
 
 from __future__ import annotations

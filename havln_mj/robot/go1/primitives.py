@@ -20,6 +20,7 @@ import mujoco
 from havln_mj.errors import InvalidArgumentError, did_you_mean
 from havln_mj.frames import wrap_angle, wrap_heading
 from havln_mj.robot.go1 import constants as const
+from havln_mj.robot.go1.commands import ForwardCommand, TurnCommand, clip
 from havln_mj.robot.go1.estimator import ESTIMATES, OdometryEstimator, TruthEstimator, quat_yaw
 from havln_mj.robot.go1.gains import Go1Gains, load_gains
 from havln_mj.robot.go1.gait import TrotGait
@@ -32,33 +33,6 @@ CONTROLLERS = ("trot", "terrain")
 MAX_DISTANCE = 10.0  # metres, per forward primitive
 MAX_TURN = 2.0 * math.pi  # radians, per turn primitive
 MAX_STAND = 600.0  # seconds
-# Blocked: no progress by this much in this long ends a primitive (a robot pushing on a wall
-# would otherwise rear up and fall).
-STALL_SECONDS = 1.0
-STALL_DISTANCE = 0.02  # m
-STALL_ANGLE = 0.05  # rad
-
-
-class _Stall:
-    """Flags a primitive whose progress has not grown for a while."""
-
-    def __init__(self, data: mujoco.MjData, seconds: float, amount: float) -> None:
-        self.data, self.seconds, self.amount = data, seconds, amount
-        self.best = 0.0
-        self.since = data.time
-        self.stalled = False
-
-    def check(self, progress: float) -> bool:
-        """Records progress; True once it has stalled."""
-        if progress > self.best + self.amount:
-            self.best, self.since = progress, self.data.time
-        elif self.data.time - self.since > self.seconds:
-            self.stalled = True
-        return self.stalled
-
-
-def _clip(v: float, lo: float, hi: float) -> float:
-    return lo if v < lo else hi if v > hi else v
 
 
 def _check_finite(name: str, value: float, limit: float, lo: float | None = None) -> float:
@@ -79,7 +53,7 @@ class Go1Body:
         gains: Controller gains (default: ``robots/go1/gains.json``).
         controller: ``"trot"`` (the blind trot, :mod:`~havln_mj.robot.go1.gait`) or
             ``"terrain"`` (the terrain-aware gait, :mod:`~havln_mj.robot.go1.terrain_gait`,
-            which reads the collision geometry through :attr:`scan`). With ``"terrain"``,
+            which reads the collision geometry through its ``scan``). With ``"terrain"``,
             :meth:`reset` stands the robot on the ground as it is (a stair, a ramp).
     """
 
@@ -179,6 +153,16 @@ class Go1Body:
         lowest = min(d.geom_xpos[g, 2] for g in self.foot_ids) - const.FOOT_RADIUS
         return d.xpos[self.trunk_id, 2] - lowest < const.FALL_HEIGHT
 
+    @property
+    def measured_vx(self) -> float:
+        """The trunk's filtered forward speed from the estimate (m/s)."""
+        return self._vx
+
+    @property
+    def measured_wz(self) -> float:
+        """The trunk's filtered yaw rate from the estimate (rad/s)."""
+        return self._wz
+
     def reset(
         self, x: float, y: float, z_floor: float, heading: float, settle: float = 0.5
     ) -> None:
@@ -261,34 +245,11 @@ class Go1Body:
         """
         distance = _check_finite("distance", distance, MAX_DISTANCE)
         g = self.gains
-        e = self.est
-        x0, y0, yaw0 = e.x, e.y, e.yaw
-        c0, s0 = math.cos(yaw0), math.sin(yaw0)
-        sign = 1.0 if distance >= 0 else -1.0
         v_max = g.odometry_v_max if self.estimate == "odometry" else g.forward_v_max
-        stall = _Stall(self.data, STALL_SECONDS, STALL_DISTANCE)
-
-        def command(hold: bool) -> tuple[float, float, float, bool]:
-            dx, dy = e.x - x0, e.y - y0
-            along = c0 * dx + s0 * dy
-            lat = -s0 * dx + c0 * dy
-            dyaw = wrap_angle(e.yaw - yaw0)
-            rem = distance - along
-            # Stop a little early: the trunk coasts on while the last feet come down.
-            done = rem * sign < g.forward_stop + g.forward_lead * abs(self._vx)
-            done = stall.check(sign * along) or done
-            if hold or done:  # no speed floor: creep back or forward onto the target
-                v = _clip(g.forward_kp * rem, -g.forward_v_min, g.forward_v_min)
-            else:
-                v = sign * _clip(g.forward_kp * abs(rem), g.forward_v_min, v_max)
-            vl = _clip(-g.forward_k_lateral * lat, -0.15, 0.15)
-            w = _clip(-g.forward_k_yaw * dyaw, -0.5, 0.5)
-            cd, sd = math.cos(dyaw), math.sin(dyaw)
-            return cd * v + sd * vl, -sd * v + cd * vl, w, done
-
+        command = ForwardCommand(self, distance, v_max)
         timeout = 2.0 + abs(distance) / max(g.forward_v_min, 1e-3)
         result = self._run("forward", distance, command, timeout, on_tick)
-        return replace(result, timed_out=True) if stall.stalled else result
+        return replace(result, timed_out=True) if command.stall.stalled else result
 
     def turn(self, theta: float, *, on_tick: OnTick | None = None) -> PrimitiveResult:
         """Turns in place by ``theta`` radians of heading (positive turns right).
@@ -298,34 +259,10 @@ class Go1Body:
         """
         theta = _check_finite("theta", theta, MAX_TURN)
         g = self.gains
-        e = self.est
-        x0, y0, yaw0 = e.x, e.y, e.yaw
-        target = -theta  # yaw grows turning left
-        sign = 1.0 if target >= 0 else -1.0
-        turned = [0.0]
-        last = [yaw0]
-        stall = _Stall(self.data, STALL_SECONDS, STALL_ANGLE)
-
-        def command(hold: bool) -> tuple[float, float, float, bool]:
-            turned[0] += wrap_angle(e.yaw - last[0])  # unwrapped, so turns past π work
-            last[0] = e.yaw
-            rem = target - turned[0]
-            done = rem * sign < g.turn_stop + g.turn_lead * abs(self._wz)
-            done = stall.check(sign * turned[0]) or done
-            if hold or done:
-                w = _clip(g.turn_kp * rem, -g.turn_w_min, g.turn_w_min)
-            else:
-                w = sign * _clip(g.turn_kp * abs(rem), g.turn_w_min, g.turn_w_max)
-            # Hold the start point: world correction velocity into the trunk frame.
-            cx, cy = -g.turn_k_hold * (e.x - x0), -g.turn_k_hold * (e.y - y0)
-            c, s = math.cos(e.yaw), math.sin(e.yaw)
-            vx = _clip(c * cx + s * cy, -0.15, 0.15)
-            vy = _clip(-s * cx + c * cy, -0.15, 0.15)
-            return vx, vy, w, done
-
+        command = TurnCommand(self, theta)
         timeout = 2.0 + abs(theta) / max(g.turn_w_min, 1e-3)
         result = self._run("turn", theta, command, timeout, on_tick)
-        return replace(result, timed_out=True) if stall.stalled else result
+        return replace(result, timed_out=True) if command.stall.stalled else result
 
     # ------------------------------------------------------------- the loop
 
@@ -382,21 +319,7 @@ class Go1Body:
             if stage == "settle" and d.time >= settle_end - 1e-9:
                 break
             if gait.walking and not self.terrain:  # the terrain gait holds speed itself
-                self._ix = _clip(
-                    self._ix + g.ki_velocity * (vx - self._vx) * dt,
-                    -g.integral_limit_velocity,
-                    g.integral_limit_velocity,
-                )
-                self._iy = _clip(
-                    self._iy + g.ki_velocity * (vy - self._vy) * dt,
-                    -g.integral_limit_velocity,
-                    g.integral_limit_velocity,
-                )
-                self._iw = _clip(
-                    self._iw + g.ki_yaw_rate * (wz - self._wz) * dt,
-                    -g.integral_limit_yaw_rate,
-                    g.integral_limit_yaw_rate,
-                )
+                self._integrate(vx, vy, wz, dt)
             if gait.walking:
                 q = gait.step(
                     dt, vx + self._ix, vy + self._iy, wz + self._iw, self._vx - vx, self._vy - vy
@@ -420,6 +343,14 @@ class Go1Body:
                 break
         e.update(dt, [True] * 4)
         return self._result(kind, target, truth0, est0, t0, steps, timed_out)
+
+    def _integrate(self, vx: float, vy: float, wz: float, dt: float) -> None:
+        """Grows the velocity loops' integrals on the twist error, clipped to their limits."""
+        g = self.gains
+        lim_v, lim_w = g.integral_limit_velocity, g.integral_limit_yaw_rate
+        self._ix = clip(self._ix + g.ki_velocity * (vx - self._vx) * dt, -lim_v, lim_v)
+        self._iy = clip(self._iy + g.ki_velocity * (vy - self._vy) * dt, -lim_v, lim_v)
+        self._iw = clip(self._iw + g.ki_yaw_rate * (wz - self._wz) * dt, -lim_w, lim_w)
 
     def _result(
         self,

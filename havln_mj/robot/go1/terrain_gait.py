@@ -29,43 +29,23 @@ import mujoco
 
 from havln_mj.robot.go1 import constants as const
 from havln_mj.robot.go1.actuation import Tracker
-from havln_mj.robot.go1.footholds import (
-    NEAR,
-    foothold,
-    is_rough,
-    standing_pose,
-    swing_along,
-    swing_height,
-    swing_heights,
-)
+from havln_mj.robot.go1.footholds import NEAR, is_rough, standing_pose
 from havln_mj.robot.go1.frames import roll_pitch, rotation, to_body, to_world
 from havln_mj.robot.go1.gains import TerrainGains
 from havln_mj.robot.go1.height_scan import HeightScan
 from havln_mj.robot.go1.kinematics import leg_fk, leg_ik
+from havln_mj.robot.go1.swing import Swing, raibert_point
 
 TROT_OFFSETS = (0.0, 0.5, 0.5, 0.0)  # FR, FL, RR, RL phase offsets
 _WEIGHT = const.TOTAL_MASS * 9.81
 _FAR = tuple(0.5 + 0.04 * k for k in range(20))  # where it caps the speed (m ahead)
 
 
-class _Swing:
-    """One swing: lift-off point, foothold, height profile."""
-
-    __slots__ = ("aim", "goal", "locked", "start", "zs")
-
-    def __init__(self, start: tuple[float, float, float]) -> None:
-        self.start = start
-        self.aim = (math.inf, math.inf)  # the Raibert point the foothold was found for
-        self.goal = start
-        self.zs: list[float] | None = None
-        self.locked = False
-
-
 class TerrainGait:
     """Gait generator on scanned terrain: twist in, 12 joint targets out.
 
     Same calling pattern as :class:`~havln_mj.robot.go1.gait.TrotGait`: :meth:`start`,
-    :meth:`step` every control tick, :meth:`request_stop`; :attr:`walking` turns false once
+    :meth:`step` every control tick, :meth:`request_stop`; ``walking`` turns false once
     every foot is down after a stop. :meth:`reset` after a teleport.
 
     Args:
@@ -98,7 +78,7 @@ class TerrainGait:
         self._cycle = 0.0
         self.stance = [True] * 4
         self.feet: list[tuple[float, float, float]] = [(0.0, 0.0, 0.0)] * 4
-        self.swings: list[_Swing | None] = [None] * 4
+        self.swings: list[Swing | None] = [None] * 4
         self._swung = [-1] * 4  # the cycle of each leg's last lift-off
         self._lifted_at = [0.0] * 4  # when each leg last lifted off (s)
         self._track = Tracker(data, joint_dadr)
@@ -372,7 +352,7 @@ class TerrainGait:
     def _lift_off(self, leg: int, pos, rot) -> None:
         self._lifted_at[leg] = self.data.time
         self.stance[leg] = False
-        self.swings[leg] = _Swing(self._foot_world(leg, pos, rot))
+        self.swings[leg] = Swing(self._foot_world(leg, pos, rot))
         self._track.forget(leg)
 
     def _land(self, leg: int, pos, rot) -> None:
@@ -381,62 +361,24 @@ class TerrainGait:
         self.stance[leg] = True
         self.swings[leg] = None
 
-    def _raibert(self, leg: int, t_left: float, twist) -> tuple[float, float]:
-        """The Raibert foothold (world xy) of a swing ending in ``t_left`` seconds.
-
-        The hip where the trunk will be at touch-down, then half a stance of the ground's
-        motion ahead, plus a balance term on the velocity error.
-        """
-        vx, vy, wz, ex, ey = twist
-        e, g = self.est, self.g
-        c, s = math.cos(e.yaw), math.sin(e.yaw)
-        tx = e.x + (c * vx - s * vy) * t_left
-        ty = e.y + (s * vx + c * vy) * t_left
-        hx, hy = const.HIP_OFFSETS[leg]
-        rx = hx * math.cos(self.pitch_ref)
-        ry = hy + const.LEG_SIDE[leg] * const.ABDUCTION
-        half = 0.5 * self.duty * self.period
-        ox = (vx - wz * ry) * half + g.raibert_gain * ex
-        oy = (vy + wz * rx) * half + g.raibert_gain * ey
-        yaw = e.yaw + wz * t_left
-        ct, st = math.cos(yaw), math.sin(yaw)
-        return (tx + ct * (rx + ox) - st * (ry + oy), ty + st * (rx + ox) + ct * (ry + oy))
-
-    def _swing_leg(self, leg, sw: _Swing, s, dt, twist, pos, rot, touching: bool):
+    def _swing_leg(self, leg, sw: Swing, s, dt, twist, pos, rot, touching: bool):
         """Joint targets of a swinging leg, or None once it has landed (it is stance then)."""
         g = self.g
         if not sw.locked:
             t_left = max(0.0, 1.0 - s) * (1.0 - self.duty) * self.period
-            ax, ay = self._raibert(leg, t_left, twist)
-            if math.hypot(ax - sw.aim[0], ay - sw.aim[1]) > 0.005:  # moved: look again
-                sw.aim = (ax, ay)
-                gx, gy = ax, ay
-                dx, dy = gx - sw.start[0], gy - sw.start[1]
-                d = math.hypot(dx, dy)
-                if d > 0.02:
-                    gx, gy = foothold(self.ground, gx, gy, dx / d, dy / d, g)
-                if sw.zs is None or math.hypot(gx - sw.goal[0], gy - sw.goal[1]) > 0.01:
-                    gz = self.ground(gx, gy) + const.FOOT_RADIUS - g.touchdown_depth
-                    if not math.isfinite(gz):  # under an obstacle: aim where the foot left
-                        gz = sw.start[2]
-                    sw.goal = (gx, gy, gz)
-                    sw.zs = swing_heights(self.ground, sw.start, sw.goal, g)
+            half = 0.5 * self.duty * self.period
+            aim = raibert_point(self.est, leg, t_left, twist, self.pitch_ref, half, g)
+            sw.aim_at(aim, self.ground, g)
             sw.locked = s >= g.lock_phase
         if touching and s > g.swing_end:
             foot = self._foot_world(leg, pos, rot)
             near = math.hypot(foot[0] - sw.goal[0], foot[1] - sw.goal[1]) < g.edge_margin
             if near and foot[2] < sw.goal[2] + g.land_band:
                 return self._land(leg, pos, rot)
-        (x0, y0, _), (gx, gy, gz) = sw.start, sw.goal
-        h = swing_along(s, g)
-        z = swing_height(sw.zs, s)
-        if s >= 1.0:  # no ground yet: keep reaching down
-            sw.goal = (gx, gy, gz - 0.3 * dt)
-            z = sw.goal[2]
-            if z < sw.start[2] - 0.35:
-                return self._land(leg, pos, rot)
-        target = (x0 + (gx - x0) * h - pos[0], y0 + (gy - y0) * h - pos[1], z - pos[2])
-        b = to_body(rot, target)
+        at = sw.target(s, dt, g)
+        if at is None:  # it found no ground reaching down
+            return self._land(leg, pos, rot)
+        b = to_body(rot, (at[0] - pos[0], at[1] - pos[1], at[2] - pos[2]))
         hx, hy = const.HIP_OFFSETS[leg]
         return self._track(leg, leg_ik(leg, b[0] - hx, b[1] - hy, b[2]), dt, None)
 

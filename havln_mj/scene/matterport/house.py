@@ -48,6 +48,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Collection
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -188,41 +189,44 @@ def read_house(path: Path, viewpoint_ids: Collection[str] | None = None) -> Regi
             names the file, the line number and the field.
     """
     path = Path(path)
-    keep = None if viewpoint_ids is None else set(viewpoint_ids)
-    header_counts: dict[str, int] = {}
-    levels: list[Level] = []
-    regions: dict[int, tuple[_Line, int, str, np.ndarray, float]] = {}
-    surfaces: dict[int, tuple[int, float]] = {}  # surface -> (region, normal z)
-    vertices: dict[int, list[np.ndarray]] = {}  # surface -> vertex xy in file order
-    categories: dict[int, tuple[str, str]] = {}
-    objects: list[tuple[_Line, int, int, int]] = []  # (line, index, region, category)
-    panoramas: dict[str, tuple[_Line, int]] = {}
-    n_portals = 0
+    records = _Records()
     for line in _lines(path):
+        records.add(line)
+    renumber = {old: new for new, old in enumerate(sorted(records.regions))}
+    regions = records.out_regions(path, renumber)
+    objects = records.out_objects(renumber)
+    viewpoint_region = records.viewpoint_regions(renumber, viewpoint_ids)
+    records.check_counts(path)
+    return Regions(
+        levels=tuple(sorted(records.levels, key=lambda lv: lv.index)),
+        regions=tuple(regions),
+        objects=tuple(objects),
+        viewpoint_region=viewpoint_region,
+    )
+
+
+@dataclass
+class _Records:
+    """A ``.house`` file's records as read, line by line, before they are joined up."""
+
+    header_counts: dict[str, int] = field(default_factory=dict)
+    levels: list[Level] = field(default_factory=list)
+    regions: dict[int, tuple[_Line, int, str, np.ndarray, float]] = field(default_factory=dict)
+    surfaces: dict[int, tuple[int, float]] = field(default_factory=dict)  # -> (region, nz)
+    vertices: dict[int, list[np.ndarray]] = field(default_factory=dict)  # surface -> xy, in order
+    categories: dict[int, tuple[str, str]] = field(default_factory=dict)
+    objects: list[tuple[_Line, int, int, int]] = field(
+        default_factory=list
+    )  # line, index, region, category
+    panoramas: dict[str, tuple[_Line, int]] = field(default_factory=dict)
+    n_portals: int = 0
+
+    def add(self, line: _Line) -> None:
+        """Reads one record line (raises on a malformed one)."""
         kind = line.tokens[0]
         if kind == "P":
-            portal = _is_int(line.tokens[1]) if len(line.tokens) > 1 else False
-            if portal and n_portals >= header_counts.get("portals", math.inf):
-                portal = False  # all portals read already: a uuid made of digits
-            need = _MIN_PORTAL if portal else _MIN_PANORAMA
-            if len(line.tokens) < need:
-                what = "portal" if portal else "panorama"
-                raise line.error(
-                    f"a {what} line needs at least {need} fields, got {len(line.tokens)}"
-                )
-            if portal:
-                for i, what in ((1, "portal_index"), (2, "region0_index"), (3, "region1_index")):
-                    line.integer(i, what)
-                n_portals += 1
-            else:
-                name = line.tokens[1]
-                line.integer(2, "panorama_index")
-                if name in panoramas:
-                    raise line.error(
-                        f"panorama {name!r} already defined on line {panoramas[name][0].lineno}"
-                    )
-                panoramas[name] = (line, line.integer(3, "region_index"))
-            continue
+            self._add_p(line)
+            return
         if kind not in _MIN_FIELDS:
             raise line.error(f"unknown record type {kind!r}; expected one of H L R P S V I C O E")
         if len(line.tokens) < _MIN_FIELDS[kind]:
@@ -230,33 +234,35 @@ def read_house(path: Path, viewpoint_ids: Collection[str] | None = None) -> Regi
         if kind == "H":
             names = ("images", "panoramas", "vertices", "surfaces", "segments", "objects")
             names += ("categories", "regions", "portals", "levels")
-            header_counts = {n: line.integer(3 + k, f"#{n}") for k, n in enumerate(names)}
+            self.header_counts = {n: line.integer(3 + k, f"#{n}") for k, n in enumerate(names)}
         elif kind == "L":
             bbox = line.numbers(7, 6, "bbox")
-            levels.append(Level(line.integer(1, "level_index"), float(bbox[2]), float(bbox[5])))
+            self.levels.append(
+                Level(line.integer(1, "level_index"), float(bbox[2]), float(bbox[5]))
+            )
         elif kind == "R":
             index = line.integer(1, "region_index")
-            if index in regions:
+            if index in self.regions:
                 raise line.error(
-                    f"region {index} already defined on line {regions[index][0].lineno}"
+                    f"region {index} already defined on line {self.regions[index][0].lineno}"
                 )
             label = line.tokens[5] if line.tokens[5] in REGION_LABELS else "-"
             bbox = line.numbers(9, 6, "bbox")
             height = line.number(15, "height")
-            regions[index] = (line, line.integer(2, "level_index"), label, bbox, height)
+            self.regions[index] = (line, line.integer(2, "level_index"), label, bbox, height)
         elif kind == "S":
             index = line.integer(1, "surface_index")
-            surfaces[index] = (line.integer(2, "region_index"), line.number(10, "nz"))
+            self.surfaces[index] = (line.integer(2, "region_index"), line.number(10, "nz"))
         elif kind == "V":
             surface = line.integer(2, "surface_index")
-            vertices.setdefault(surface, []).append(line.numbers(4, 2, "position"))
+            self.vertices.setdefault(surface, []).append(line.numbers(4, 2, "position"))
         elif kind == "C":
             index = line.integer(1, "category_index")
             line.integer(2, "category_mapping_index")
             line.integer(4, "mpcat40_index")
-            categories[index] = (line.tokens[3].replace("#", " "), line.tokens[5])
+            self.categories[index] = (line.tokens[3].replace("#", " "), line.tokens[5])
         elif kind == "O":
-            objects.append(
+            self.objects.append(
                 (
                     line,
                     line.integer(1, "object_index"),
@@ -265,55 +271,89 @@ def read_house(path: Path, viewpoint_ids: Collection[str] | None = None) -> Regi
                 )
             )
 
-    # Regions, renumbered 0..N-1 in index order (the file's own indices when contiguous).
-    order = sorted(regions)
-    renumber = {old: new for new, old in enumerate(order)}
-    by_region: dict[int, list[tuple[float, list[np.ndarray]]]] = {}
-    for surface, (region, nz) in surfaces.items():
-        by_region.setdefault(region, []).append((nz, vertices.get(surface, [])))
-    for surface in vertices:
-        if surface not in surfaces:
-            log.warning("%s: vertices reference surface %d, which has no S line", path, surface)
-    out_regions = []
-    for old in order:
-        _, level, label, bbox, height = regions[old]
-        polygon = _floor_polygon(by_region.get(old, []), bbox)
-        out_regions.append(Region(renumber[old], level, label, polygon, bbox, height))
+    def _add_p(self, line: _Line) -> None:
+        """A ``P`` line: a portal or a panorama (see the module docstring)."""
+        portal = _is_int(line.tokens[1]) if len(line.tokens) > 1 else False
+        if portal and self.n_portals >= self.header_counts.get("portals", math.inf):
+            portal = False  # all portals read already: a uuid made of digits
+        need = _MIN_PORTAL if portal else _MIN_PANORAMA
+        if len(line.tokens) < need:
+            what = "portal" if portal else "panorama"
+            raise line.error(f"a {what} line needs at least {need} fields, got {len(line.tokens)}")
+        if portal:
+            for i, what in ((1, "portal_index"), (2, "region0_index"), (3, "region1_index")):
+                line.integer(i, what)
+            self.n_portals += 1
+            return
+        name = line.tokens[1]
+        line.integer(2, "panorama_index")
+        if name in self.panoramas:
+            raise line.error(
+                f"panorama {name!r} already defined on line {self.panoramas[name][0].lineno}"
+            )
+        self.panoramas[name] = (line, line.integer(3, "region_index"))
 
-    out_objects = []
-    for line, index, region, category in objects:
-        if region < 0:
-            continue
-        if region not in renumber:
-            raise line.error(f"object {index} refers to region {region}, which has no R line")
-        if category < 0:
-            names = _NO_CATEGORY
-        elif category in categories:
-            names = categories[category]
-        else:
-            raise line.error(f"object {index} refers to category {category}, which has no C line")
-        bbox, yaw = _axis_aligned(line)
-        out_objects.append(SceneObject(index, renumber[region], names[0], names[1], bbox, yaw))
+    def out_regions(self, path: Path, renumber: dict[int, int]) -> list[Region]:
+        """The regions in index order, each with its floor polygon."""
+        by_region: dict[int, list[tuple[float, list[np.ndarray]]]] = {}
+        for surface, (region, nz) in self.surfaces.items():
+            by_region.setdefault(region, []).append((nz, self.vertices.get(surface, [])))
+        for surface in self.vertices:
+            if surface not in self.surfaces:
+                log.warning("%s: vertices reference surface %d, which has no S line", path, surface)
+        out = []
+        for old in renumber:
+            _, level, label, bbox, height = self.regions[old]
+            polygon = _floor_polygon(by_region.get(old, []), bbox)
+            out.append(Region(renumber[old], level, label, polygon, bbox, height))
+        return out
 
-    viewpoint_region = {}
-    for name, (line, region) in panoramas.items():
-        if region < 0 or (keep is not None and name not in keep):
-            continue
-        if region not in renumber:
-            raise line.error(f"panorama {name!r} refers to region {region}, which has no R line")
-        viewpoint_region[name] = renumber[region]
+    def out_objects(self, renumber: dict[int, int]) -> list[SceneObject]:
+        """The objects inside a region, with their categories' names."""
+        out = []
+        for line, index, region, category in self.objects:
+            if region < 0:
+                continue
+            if region not in renumber:
+                raise line.error(f"object {index} refers to region {region}, which has no R line")
+            if category < 0:
+                names = _NO_CATEGORY
+            elif category in self.categories:
+                names = self.categories[category]
+            else:
+                raise line.error(
+                    f"object {index} refers to category {category}, which has no C line"
+                )
+            bbox, yaw = _axis_aligned(line)
+            out.append(SceneObject(index, renumber[region], names[0], names[1], bbox, yaw))
+        return out
 
-    found = {"panoramas": len(panoramas), "portals": n_portals, "regions": len(regions)}
-    found |= {"levels": len(levels), "objects": len(objects), "categories": len(categories)}
-    for what, n in found.items():
-        if what in header_counts and header_counts[what] != n:
-            log.warning("%s: header says %d %s, found %d", path, header_counts[what], what, n)
-    return Regions(
-        levels=tuple(sorted(levels, key=lambda lv: lv.index)),
-        regions=tuple(out_regions),
-        objects=tuple(out_objects),
-        viewpoint_region=viewpoint_region,
-    )
+    def viewpoint_regions(
+        self, renumber: dict[int, int], viewpoint_ids: Collection[str] | None
+    ) -> dict[str, int]:
+        """Viewpoint -> region, for the panoramas in a region (and in ``viewpoint_ids``)."""
+        keep = None if viewpoint_ids is None else set(viewpoint_ids)
+        out = {}
+        for name, (line, region) in self.panoramas.items():
+            if region < 0 or (keep is not None and name not in keep):
+                continue
+            if region not in renumber:
+                raise line.error(
+                    f"panorama {name!r} refers to region {region}, which has no R line"
+                )
+            out[name] = renumber[region]
+        return out
+
+    def check_counts(self, path: Path) -> None:
+        """Logs the counts that disagree with the header's."""
+        found = {"panoramas": len(self.panoramas), "portals": self.n_portals}
+        found |= {"regions": len(self.regions), "levels": len(self.levels)}
+        found |= {"objects": len(self.objects), "categories": len(self.categories)}
+        for what, n in found.items():
+            if what in self.header_counts and self.header_counts[what] != n:
+                log.warning(
+                    "%s: header says %d %s, found %d", path, self.header_counts[what], what, n
+                )
 
 
 def read_object_classes(path: Path | str) -> dict[int, tuple[str, int]]:

@@ -195,82 +195,93 @@ def furnish_room(
     items = []
     for name, lo_n, hi_n in recipe.room(room.kind)["furniture"]:
         spec = recipe.furniture(name)
-        w, d, h = spec["size"]
+        w, d, _ = spec["size"]
         for _ in range(int(rng.integers(lo_n, hi_n + 1))):
             if covered + w * d > _MAX_COVER * area:
                 break
             for _try in range(25):
-                place = spec["place"]
-                if place == "centre":
-                    quarter = int(rng.integers(0, 4))
-                    fx0, fy0, fx1, fy1 = _turn((-w / 2, -d / 2, w / 2, d / 2), quarter)
-                    cx = (
-                        rng.uniform(x0 - fx0 + 0.6, x1 - fx1 - 0.6)
-                        if x1 - x0 > fx1 - fx0 + 1.2
-                        else None
-                    )
-                    cy = (
-                        rng.uniform(y0 - fy0 + 0.6, y1 - fy1 - 0.6)
-                        if y1 - y0 > fy1 - fy0 + 1.2
-                        else None
-                    )
-                    if cx is None or cy is None:
-                        break
+                if spec["place"] == "centre":
+                    spot = _centre_spot(rng, w, d, inner)
+                    if spot is None:
+                        break  # the room is too small for it away from the walls
                 else:
-                    side = ("south", "north", "west", "east")[int(rng.integers(0, 4))]
-                    quarter = _YAW_FOR_SIDE[side]
-                    fx0, fy0, fx1, fy1 = _turn((-w / 2, -d / 2, w / 2, d / 2), quarter)
-                    along_x = side in ("south", "north")
-                    lo_a, hi_a = (x0 - fx0, x1 - fx1) if along_x else (y0 - fy0, y1 - fy1)
-                    if hi_a < lo_a:
+                    spot = _wall_spot(rng, spec["place"], w, d, inner)
+                    if spot is None:
                         continue
-                    t = (
-                        rng.uniform(lo_a, hi_a)
-                        if place == "wall"
-                        else (lo_a, hi_a)[int(rng.integers(2))]
-                    )
-                    gap = 0.01
-                    if side == "south":
-                        cx, cy = t, y0 - fy0 + gap
-                    elif side == "north":
-                        cx, cy = t, y1 - fy1 - gap
-                    elif side == "west":
-                        cx, cy = x0 - fx0 + gap, t
-                    else:
-                        cx, cy = x1 - fx1 - gap, t
-                foot = np.array([cx + fx0, cy + fy0, cx + fx1, cy + fy1])
-                if (
-                    foot[0] < x0 - 1e-6
-                    or foot[1] < y0 - 1e-6
-                    or foot[2] > x1 + 1e-6
-                    or foot[3] > y1 + 1e-6
-                ):
+                quarter, cx, cy, foot = spot
+                if not _free(foot, inner, taken, keepouts):
                     continue
-                if any(_overlaps(foot, o, 0.05) for o in taken) or any(
-                    _overlaps(foot, k) for k in keepouts
-                ):
-                    continue
-                parts = []
-                for xl, yl, zl, xh, yh, zh, rgba in _local_parts(spec["shape"], w, d, h, spec):
-                    bx0, by0, bx1, by1 = _turn((xl, yl, xh, yh), quarter)
-                    parts.append(
-                        Part(
-                            np.array([cx + bx0, cy + by0, zl]),
-                            np.array([cx + bx1, cy + by1, zh]),
-                            rgba,
-                        )
-                    )
-                items.append(
-                    Item(
-                        name,
-                        spec["mpcat40"],
-                        room.index,
-                        tuple(parts),
-                        quarter * np.pi / 2,
-                        spec.get("seat_height"),
-                    )
-                )
+                items.append(_item(name, spec, room.index, quarter, cx, cy))
                 taken.append(foot)
                 covered += w * d
                 break
     return items
+
+
+_Spot = tuple[int, float, float, np.ndarray]
+"""Quarter turns, centre x and y, and the footprint (x0, y0, x1, y1) of a proposed place."""
+
+
+def _centre_spot(rng: np.random.Generator, w: float, d: float, inner: np.ndarray) -> _Spot | None:
+    """A random place at least 0.6 m from the walls (None: the room is too small)."""
+    x0, y0, x1, y1 = inner
+    quarter = int(rng.integers(0, 4))
+    fx0, fy0, fx1, fy1 = _turn((-w / 2, -d / 2, w / 2, d / 2), quarter)
+    cx = rng.uniform(x0 - fx0 + 0.6, x1 - fx1 - 0.6) if x1 - x0 > fx1 - fx0 + 1.2 else None
+    cy = rng.uniform(y0 - fy0 + 0.6, y1 - fy1 - 0.6) if y1 - y0 > fy1 - fy0 + 1.2 else None
+    if cx is None or cy is None:
+        return None
+    return quarter, cx, cy, np.array([cx + fx0, cy + fy0, cx + fx1, cy + fy1])
+
+
+def _wall_spot(
+    rng: np.random.Generator, place: str, w: float, d: float, inner: np.ndarray
+) -> _Spot | None:
+    """A place with the item's back against a random wall.
+
+    Anywhere along the wall for ``place="wall"``, else at one of its ends (None: the item is
+    wider than that wall).
+    """
+    x0, y0, x1, y1 = inner
+    side = ("south", "north", "west", "east")[int(rng.integers(0, 4))]
+    quarter = _YAW_FOR_SIDE[side]
+    fx0, fy0, fx1, fy1 = _turn((-w / 2, -d / 2, w / 2, d / 2), quarter)
+    along_x = side in ("south", "north")
+    lo_a, hi_a = (x0 - fx0, x1 - fx1) if along_x else (y0 - fy0, y1 - fy1)
+    if hi_a < lo_a:
+        return None
+    t = rng.uniform(lo_a, hi_a) if place == "wall" else (lo_a, hi_a)[int(rng.integers(2))]
+    gap = 0.01
+    if side == "south":
+        cx, cy = t, y0 - fy0 + gap
+    elif side == "north":
+        cx, cy = t, y1 - fy1 - gap
+    elif side == "west":
+        cx, cy = x0 - fx0 + gap, t
+    else:
+        cx, cy = x1 - fx1 - gap, t
+    return quarter, cx, cy, np.array([cx + fx0, cy + fy0, cx + fx1, cy + fy1])
+
+
+def _free(
+    foot: np.ndarray, inner: np.ndarray, taken: list[np.ndarray], keepouts: list[np.ndarray]
+) -> bool:
+    """Whether a footprint lies inside the room, clear of the items placed and the keepouts."""
+    x0, y0, x1, y1 = inner
+    if foot[0] < x0 - 1e-6 or foot[1] < y0 - 1e-6 or foot[2] > x1 + 1e-6 or foot[3] > y1 + 1e-6:
+        return False
+    return not (
+        any(_overlaps(foot, o, 0.05) for o in taken) or any(_overlaps(foot, k) for k in keepouts)
+    )
+
+
+def _item(name: str, spec: dict, room: int, quarter: int, cx: float, cy: float) -> Item:
+    """The item ``name`` placed at (cx, cy), turned by ``quarter`` quarter turns."""
+    w, d, h = spec["size"]
+    parts = []
+    for xl, yl, zl, xh, yh, zh, rgba in _local_parts(spec["shape"], w, d, h, spec):
+        bx0, by0, bx1, by1 = _turn((xl, yl, xh, yh), quarter)
+        lo, hi = np.array([cx + bx0, cy + by0, zl]), np.array([cx + bx1, cy + by1, zh])
+        parts.append(Part(lo, hi, rgba))
+    yaw = quarter * np.pi / 2
+    return Item(name, spec["mpcat40"], room, tuple(parts), yaw, spec.get("seat_height"))
