@@ -274,20 +274,20 @@ class Batch:
         the body's heading, as for robot actions and starts); ``contact`` the collision
         signal (None: measured in the state reached, by the batch's rule).
         """
+        duration, _, viewpoint, body_heading, arrived, fell, diverged, contacts, _ = outcome
         if not starting:
-            el.time += outcome.duration
+            el.time += duration
             el.step += 1
         if self.clock.kind == "continuous":
             el.people_t = el.time
         el.people_xyz = None
-        if heading is None or outcome.heading != heading:
-            heading, elevation, index = self.view(outcome.heading, elevation)
+        if heading is None or body_heading != heading:
+            heading, elevation, index = self.view(body_heading, elevation)
         el.heading, el.elevation, el.view_index = heading, elevation, index
-        el.navigable = navigable = el.table.candidates(
-            outcome.viewpoint, heading, elevation, self._cos_fov
-        )
+        el.navigable = navigable = el.table.candidates(viewpoint, heading, elevation, self._cos_fov)
         if contact is None:
             contact = self._contact(el, outcome)
+        crushed, crushed_by, min_distance = contact
         if self._blank is None:
             if starting and el.film is not None:
                 el.film.tick(el.time)
@@ -305,15 +305,15 @@ class Batch:
             index,
             navigable,
             el.time,
-            int(contact.crushed),
-            contact.people,
-            contact.min_distance,
+            1 if crushed else 0,
+            crushed_by,
+            min_distance,
             mask,
             el.body.pose(),
-            outcome.fell,
-            outcome.contacts,
-            outcome.arrived,
-            outcome.diverged,
+            fell,
+            contacts,
+            arrived,
+            diverged,
             semantic,
             instance,
         )

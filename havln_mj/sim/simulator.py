@@ -374,8 +374,10 @@ class Simulator(SimulatorSettings, SimulatorExtensions, SimulatorReports):
         Raises:
             NotInitializedError: No episode has been started.
         """
-        self._started("getState")
-        return [el.state for el in self._batch.elements]
+        batch = self._batch
+        if batch is None or not batch.elements:
+            self._started("getState")  # raises
+        return [el.state for el in batch.elements]
 
     # Pythonic aliases; the MatterSim names above are the reference.
     new_episode = newEpisode
