@@ -12,8 +12,9 @@ without its gathers, rotations and per-coordinate work (the values agree to roun
 Over the first :data:`UNROLLED_S` simulated seconds (every episode's start, where nearly every
 query falls) the loops are also laid out unrolled, cycle after cycle, on an axis of their own:
 a query there is one multiply-add and the interpolation, with no wrapping. Where a loop wraps,
-its last frame and its ``loop_start`` frame share one axis position (the later one wins), as
-the wrap plays them.
+its last frame and its ``loop_start`` frame share one axis position, so that just past it the
+track goes on from ``loop_start`` as the wrap plays it (a loop whose ends differ jumps there).
+The unrolled tracks take ``UNROLLED_S × fps`` positions per person (about 230 kB at 30 fps).
 """
 
 from __future__ import annotations
