@@ -51,9 +51,21 @@ def check_index(i: int, navigable: Sequence[ViewPoint], k: object) -> int:
 
 
 def check_graph_steps(
-    elements: Sequence, indices: list, headings: list, elevations: list
+    elements: Sequence, indices: object, headings: object, elevations: object
 ) -> list[GraphStep]:
-    """Each element's ``makeAction`` arguments checked: ``(element, index, dh, de)``."""
+    """Each element's ``makeAction`` arguments checked: ``(element, index, dh, de)``.
+
+    Raises:
+        BatchSizeError: A list's length is not the number of elements.
+        InvalidActionError: An index is out of range or a delta is not finite.
+    """
+    n = len(elements)
+    if not (type(indices) is list and len(indices) == n):
+        indices = per_element("index", indices, n)
+    if not (type(headings) is list and len(headings) == n):
+        headings = per_element("heading", headings, n)
+    if not (type(elevations) is list and len(elevations) == n):
+        elevations = per_element("elevation", elevations, n)
     steps = []
     for i, el in enumerate(elements):
         k, dh, de = indices[i], headings[i], elevations[i]

@@ -22,20 +22,11 @@ import numpy as np
 
 from havln_mj.frames import TWO_PI
 from havln_mj.sim.body import Body, BodyKind, Film, Outcome
-from havln_mj.sim.crowd import (
-    NO_PROXIMITY,
-    Crowd,
-    NearMemo,
-    Proximity,
-    batch_proximity,
-    ha3d_points,
-    knots_proximity,
-    sample_knots,
-    state_proximity,
-)
+from havln_mj.sim.crowd import NO_PROXIMITY, Crowd, Proximity, ha3d_points, state_proximity
 from havln_mj.sim.frame import View
 from havln_mj.sim.images import ImageFormat
 from havln_mj.sim.navigation import NavTable
+from havln_mj.sim.proximity import NearMemo, batch_proximity, knots_proximity, sample_knots
 from havln_mj.sim.rules import CollisionRule, HumanClock
 from havln_mj.sim.settings import Settings
 from havln_mj.sim.state import SimState, ViewPoint
@@ -119,6 +110,7 @@ class Batch:
         self._near = NearMemo()
         self._cos_fov: float | None = None
         self._blank: tuple[np.ndarray, np.ndarray] | None = None
+        self._revision = -1  # the settings' revision _cos_fov and _blank were derived from
 
     def view(self, heading: float, elevation: float) -> tuple[float, float, int]:
         """Heading, elevation and view index under the view rules."""
@@ -190,8 +182,11 @@ class Batch:
         """
         cfg = self.cfg
         discretized, (lo, hi) = cfg.discretized, cfg.elevation_limits
-        self._prepare_step()
-        shared = self._tick(self.clock.after_action) if actions else None
+        if cfg.revision != self._revision:
+            self._prepare_step()
+        shared = None
+        if actions and self.clock.kind == "ha3d":
+            shared = self._tick(self.clock.after_action)
         along = self.rule.check == "action"
         elements, deferred = self.elements, []
         for n, (i, k, dh, de) in enumerate(actions):
@@ -235,10 +230,15 @@ class Batch:
         self._settle_all(moved)
 
     def _prepare_step(self) -> None:
-        """What every element's state needs this step: the navigation rule, blank images."""
+        """What every element's state needs this step: the navigation rule, blank images.
+
+        Derived once per change of the settings (the camera may change between steps).
+        """
         cfg = self.cfg
-        self._cos_fov = cfg.cos_half_hfov()
-        self._blank = None if cfg.rendering else self.format.blank(cfg.width, cfg.height)
+        if cfg.revision != self._revision:
+            self._revision = cfg.revision
+            self._cos_fov = cfg.cos_half_hfov()
+            self._blank = None if cfg.rendering else self.format.blank(cfg.width, cfg.height)
 
     def _settle_all(self, moved: list[tuple], starting: bool = False) -> None:
         """Settles each ``(element, outcome, heading asked, elevation, view index)``.
@@ -248,8 +248,11 @@ class Batch:
         """
         contacts: list[Proximity | None]
         if self.rule.check == "action":
-            tracks = [(el.crowd, outcome.knots) for el, outcome, *_ in moved]
+            tracks = [(m[0].crowd, m[1].knots) for m in moved]
             contacts = batch_proximity(tracks, self.rule.threshold, self._near)
+            if len(moved) == 1:  # a batch of one (hot)
+                self._settle(*moved[0], contacts[0], starting)
+                return
         else:
             contacts = [None if m[0].people else NO_PROXIMITY for m in moved]
         for m, contact in zip(moved, contacts, strict=True):
@@ -271,20 +274,20 @@ class Batch:
         the body's heading, as for robot actions and starts); ``contact`` the collision
         signal (None: measured in the state reached, by the batch's rule).
         """
+        duration, _, viewpoint, body_heading, arrived, fell, diverged, contacts, _ = outcome
         if not starting:
-            el.time += outcome.duration
+            el.time += duration
             el.step += 1
         if self.clock.kind == "continuous":
             el.people_t = el.time
         el.people_xyz = None
-        if heading is None or outcome.heading != heading:
-            heading, elevation, index = self.view(outcome.heading, elevation)
+        if heading is None or body_heading != heading:
+            heading, elevation, index = self.view(body_heading, elevation)
         el.heading, el.elevation, el.view_index = heading, elevation, index
-        el.navigable = navigable = el.table.candidates(
-            outcome.viewpoint, heading, elevation, self._cos_fov
-        )
+        el.navigable = navigable = el.table.candidates(viewpoint, heading, elevation, self._cos_fov)
         if contact is None:
             contact = self._contact(el, outcome)
+        crushed, crushed_by, min_distance = contact
         if self._blank is None:
             if starting and el.film is not None:
                 el.film.tick(el.time)
@@ -302,15 +305,15 @@ class Batch:
             index,
             navigable,
             el.time,
-            int(contact.crushed),
-            contact.people,
-            contact.min_distance,
+            1 if crushed else 0,
+            crushed_by,
+            min_distance,
             mask,
             el.body.pose(),
-            outcome.fell,
-            outcome.contacts,
-            outcome.arrived,
-            outcome.diverged,
+            fell,
+            contacts,
+            arrived,
+            diverged,
             semantic,
             instance,
         )

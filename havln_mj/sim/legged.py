@@ -45,7 +45,8 @@ from havln_mj.robot.go1.primitives import Go1Body, OnTick, PrimitiveResult
 from havln_mj.scene.navgraph import LEVEL_GAP
 from havln_mj.scene.proxy.routes import route_floor_points
 from havln_mj.scene.scan import Scan, floor_heights
-from havln_mj.sim.crowd import NO_CROWD, Crowd, Proximity, knots_proximity
+from havln_mj.sim.crowd import NO_CROWD, Crowd, Proximity
+from havln_mj.sim.proximity import knots_proximity
 from havln_mj.sim.world import WorldOptions, build_world, world_spec
 
 PREFIX = "go1/"

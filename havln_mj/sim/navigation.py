@@ -27,6 +27,7 @@ from havln_mj.scene.navgraph import NavGraph
 from havln_mj.sim.state import ViewPoint
 
 _PI = math.pi
+_cos, _hypot = math.cos, math.hypot
 _TWO_PI = 2.0 * math.pi
 _MARGIN = 1e-9  # radians: the bisection window is this much wider than the field of view
 
@@ -124,25 +125,36 @@ class NavTable:
             UnknownViewpointError: ``vp`` is unknown or excluded.
         """
         node = self._nodes.get(vp) or self._prepare(vp)
-        rows = node.rows
-        if cos_half_hfov is not None:
-            c, w = self._window
-            if c != cos_half_hfov:
-                w = self._half_width(cos_half_hfov)
-            if w < _PI and 0.0 <= heading < _TWO_PI:
-                b = node.bearings
-                rows = node.ring[bisect_left(b, heading - w) : bisect_right(b, heading + w)]
         found = []
-        for order, j, ix, x, y, z, bearing, flat, elev, dist in rows:
-            rel = bearing - heading
-            if rel > _PI or rel <= -_PI:
-                rel = math.fmod(rel + _PI, _TWO_PI)
-                rel = rel - _PI if rel > 0.0 else rel + _PI
-            if cos_half_hfov is not None and (flat == 0.0 or math.cos(rel) < cos_half_hfov):
-                continue
-            rel_e = elev - elevation
-            vp_j = ViewPoint(j, ix, x, y, z, rel, rel_e, dist)
-            found.append((math.hypot(rel, rel_e), order, vp_j))
+        c, w = self._window
+        if cos_half_hfov is not None and c != cos_half_hfov:
+            c, w = cos_half_hfov, self._half_width(cos_half_hfov)
+        if cos_half_hfov is not None and w < _PI and 0.0 <= heading < _TWO_PI:
+            # Restricted, the usual case: the bisected window holds only neighbours with a
+            # bearing (never one straight above or below).
+            b = node.bearings
+            for order, j, ix, x, y, z, bearing, _flat, elev, dist in node.ring[
+                bisect_left(b, heading - w) : bisect_right(b, heading + w)
+            ]:
+                rel = bearing - heading
+                if rel > _PI or rel <= -_PI:
+                    rel = math.fmod(rel + _PI, _TWO_PI)
+                    rel = rel - _PI if rel > 0.0 else rel + _PI
+                if _cos(rel) >= c:
+                    rel_e = elev - elevation
+                    vp_j = ViewPoint(j, ix, x, y, z, rel, rel_e, dist)
+                    found.append((_hypot(rel, rel_e), order, vp_j))
+        else:
+            for order, j, ix, x, y, z, bearing, flat, elev, dist in node.rows:
+                rel = bearing - heading
+                if rel > _PI or rel <= -_PI:
+                    rel = math.fmod(rel + _PI, _TWO_PI)
+                    rel = rel - _PI if rel > 0.0 else rel + _PI
+                if cos_half_hfov is not None and (flat == 0.0 or math.cos(rel) < cos_half_hfov):
+                    continue
+                rel_e = elev - elevation
+                vp_j = ViewPoint(j, ix, x, y, z, rel, rel_e, dist)
+                found.append((math.hypot(rel, rel_e), order, vp_j))
         out = [node.location]
         if len(found) == 1:
             out.append(found[0][2])

@@ -31,6 +31,9 @@ from havln_mj.sim.navigation import camera_positions
 from havln_mj.sim.world import WorldOptions, build_world
 
 log = logging.getLogger(__name__)
+_PI = math.pi
+_TWO_PI = 2.0 * math.pi
+_outcome = tuple.__new__  # an Outcome without its Python-level constructor (every move)
 
 
 class Stage:
@@ -43,6 +46,10 @@ class Stage:
         self, scan: Scan, options: WorldOptions, crowd: Crowd, skybox_root: str | None = None
     ) -> None:
         self.world = build_world(scan, options, crowd.shapes, crowd.skins)
+        # The compiled model holds the building now: the scan's loaded mesh (tens of MB of
+        # vertices and texture arrays) is let go, read again if a world is ever rebuilt.
+        for loaded in ("mesh_parts", "mesh"):
+            scan.__dict__.pop(loaded, None)
         self.skybox = _skybox_source(scan, skybox_root)
         self.data = mujoco.MjData(self.world.model)
         self.frames = Frames(self.world.model, crowd, options.people_style)
@@ -187,19 +194,27 @@ class GraphPointBody:
     ) -> Outcome:
         """Moves straight to ``target``, then turns to ``heading``/``elevation``."""
         here = self.xyz
-        there = here if target == self.viewpoint else self._xyz[target]
         kind = self._kind
-        move_s = math.dist(here, there) / kind.speed
-        turn = max(abs(wrap_angle(heading - self.heading)), abs(elevation - self.elevation))
+        if target == self.viewpoint:
+            there, move_s = here, 0.0
+        else:
+            there = self._xyz[target]
+            move_s = math.dist(here, there) / kind.speed
+        dh = math.fmod(heading - self.heading + _PI, _TWO_PI)  # wrap_angle, inlined (hot)
+        if dh <= 0.0:
+            dh += _TWO_PI
+        dh -= _PI
+        turn = max(abs(dh), abs(elevation - self.elevation))
         duration = move_s + turn / kind.turn_rate
         if duration == 0.0:
             duration = wait_s
+        (x0, y0, z0), (x1, y1, z1) = here, there
         if move_s > 0.0 and duration > move_s:
-            knots = ((t, *here), (t + move_s, *there), (t + duration, *there))
+            knots = ((t, x0, y0, z0), (t + move_s, x1, y1, z1), (t + duration, x1, y1, z1))
         elif move_s > 0.0 or duration > 0.0:
-            knots = ((t, *here), (t + duration, *there))
+            knots = ((t, x0, y0, z0), (t + duration, x1, y1, z1))
         else:
-            knots = ((t, *here),)
+            knots = ((t, x0, y0, z0),)
         if self.observe is not ignore:
             self.observe(knots)  # people react to the move they see coming, frames included
         if film is not None:
@@ -207,7 +222,7 @@ class GraphPointBody:
         self.viewpoint, self.xyz = target, there
         self.heading, self.elevation = heading, elevation
         self._drawn = None
-        return Outcome(duration, knots, target, heading)
+        return _outcome(Outcome, (duration, knots, target, heading, True, False, False, 0, None))
 
     def _film(self, film, t0, move_s, duration, here, there, heading, elevation) -> None:
         """Draws the action's frames: along the move, then through the turn."""

@@ -4,7 +4,7 @@ Two protocols are supported, each a pair of small frozen settings the simulator'
 
 * **Strict** (the default, :meth:`CollisionRule.strict` and :meth:`HumanClock.continuous`):
   the signal covers every action continuously (sampled at ≥ 16 Hz along the body's track,
-  :func:`~havln_mj.sim.crowd.knots_proximity`), measured horizontally from the agent's base
+  :func:`~havln_mj.sim.proximity.knots_proximity`), measured horizontally from the agent's base
   to each person's pelvis; people follow each element's own simulated time, which every
   action advances by its duration.
 * **HA3D** (:meth:`CollisionRule.ha3d` and :meth:`HumanClock.ha3d`), the rules of the HA3D

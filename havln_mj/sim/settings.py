@@ -71,6 +71,9 @@ class Settings:
     labels: bool = False
     skybox: bool = False
     world_options: WorldOptions = field(default_factory=lambda: WorldOptions(collision="none"))
+    revision: int = field(default=0, compare=False, repr=False)
+    """Counts changes made through the setters (what is derived from the settings is kept
+    until it changes)."""
 
     def view_settings(self) -> ViewSettings:
         """What each rendered frame looks like."""
@@ -123,6 +126,7 @@ class SimulatorSettings:
             )
             return
         setattr(self._cfg, name, value)
+        self._cfg.revision += 1
 
     def setDatasetPath(self, path: str | Path) -> None:  # noqa: N802 - MatterSim's names
         """Root of the user's Matterport3D data (raw or habitat layout), for real meshes."""

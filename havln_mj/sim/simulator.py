@@ -67,6 +67,7 @@ from havln_mj.sim.egocentric import DEFAULT_TURN, EgoAction, ego_to_mattersim, p
 from havln_mj.sim.extensions import SimulatorExtensions
 from havln_mj.sim.images import ImageFormat
 from havln_mj.sim.navigation import NavTable
+from havln_mj.sim.reports import SimulatorReports
 from havln_mj.sim.rules import (
     CollisionRule,
     HumanClock,
@@ -80,7 +81,7 @@ __all__ = ["BODIES", "ROBOT_ACTIONS", "WAIT_S", "Simulator"]
 BODIES = BODY_KINDS
 
 
-class Simulator(SimulatorSettings, SimulatorExtensions):
+class Simulator(SimulatorSettings, SimulatorExtensions, SimulatorReports):
     """A batch of agents navigating scans, MatterSim-style.
 
     Example:
@@ -297,15 +298,11 @@ class Simulator(SimulatorSettings, SimulatorExtensions):
                 ``ValueError``).
         """
         t0 = time.perf_counter()
-        elements = self._running()
-        n = self._cfg.batch_size
-        steps = check_graph_steps(
-            elements,
-            per_element("index", index, n),
-            per_element("heading", heading, n),
-            per_element("elevation", elevation, n),
-        )
-        self._batch.apply(steps)
+        batch = self._batch
+        if batch is None or not batch.elements:
+            self._running()  # raises
+        steps = check_graph_steps(batch.elements, index, heading, elevation)
+        batch.apply(steps)
         self._timers["process"] += time.perf_counter() - t0
 
     def makeEgoAction(self, action: Sequence[EgoAction | int | str]) -> None:  # noqa: N802
@@ -377,48 +374,10 @@ class Simulator(SimulatorSettings, SimulatorExtensions):
         Raises:
             NotInitializedError: No episode has been started.
         """
-        self._started("getState")
-        return [el.state for el in self._batch.elements]
-
-    def getHumanState(self) -> list[list]:  # noqa: N802
-        """Each element's people as its state has them: a list of states per element.
-
-        People are posed at the element's time (on HA3D's clock, at the shared counter's
-        time of the element's last state). A state
-        (:class:`havln_mj.humans.crowd.PersonState`) has ``position`` (pelvis), ``heading``,
-        ``velocity``, ``activity``, ``text`` and ``region``.
-        """
-        self._started("getHumanState")
-        return [el.crowd.states(el.people_t) for el in self._batch.elements]
-
-    def getHumanPositions(self) -> list[np.ndarray]:  # noqa: N802 - getHumanState's sibling
-        """Each element's people's pelvis positions ``(K, 3)`` as its state has them.
-
-        The ``position`` of every :meth:`getHumanState` entry, without computing the rest.
-        """
-        self._started("getHumanPositions")
-        return [self._batch.people_at(el).copy() for el in self._batch.elements]
-
-    def _started(self, what: str) -> None:
-        if self._batch is None or not self._batch.elements:
-            raise NotInitializedError(f"{what} called before newEpisode()")
-
-    # ------------------------------------------------------------------ timing
-
-    def resetTimers(self) -> None:  # noqa: N802
-        """Zeroes the timers ``timingInfo`` reports."""
-        self._timers.update(process=0.0, render=0.0, frames=0)  # the batch shares the dict
-
-    def timingInfo(self) -> str:  # noqa: N802
-        """Time spent in simulator calls and in rendering since the last reset."""
-        t = self._timers
-        frames = t["frames"]
-        fps = f"{frames / t['render']:.1f} fps" if t["render"] > 0 else "n/a"
-        return (
-            f"Rendered {frames} frames\n"
-            f"Process time: {t['process'] * 1e3:.1f} ms\n"
-            f"\tRendering: {t['render'] * 1e3:.1f} ms ({fps})\n"
-        )
+        batch = self._batch
+        if batch is None or not batch.elements:
+            self._started("getState")  # raises
+        return [el.state for el in batch.elements]
 
     # Pythonic aliases; the MatterSim names above are the reference.
     new_episode = newEpisode
@@ -428,4 +387,3 @@ class Simulator(SimulatorSettings, SimulatorExtensions):
     make_robot_action = makeRobotAction
     get_geodesic_distance = getGeodesicDistance
     get_state = getState
-    get_human_state = getHumanState

@@ -11,11 +11,10 @@ from havln_mj.humans.clip import Clip
 from havln_mj.humans.crowd import Crowd, Person
 from havln_mj.humans.population import populate
 from havln_mj.scene.scan import load_scan
-from havln_mj.sim.crowd import (
-    NEAR_M,
+from havln_mj.sim.crowd import NEAR_M, Proximity
+from havln_mj.sim.proximity import (
     SAMPLE_HZ,
     NearMemo,
-    Proximity,
     _near,
     batch_proximity,
     knots_proximity,
