@@ -19,6 +19,8 @@ Workloads (rendering off; camera 640×480, vfov 60°, continuous headings, restr
 navigation, identical on both sides):
 
 * ``real_b1``, ``real_b8``: the 90 real connectivity graphs (``--data``), batch 1 and 8.
+* ``real_b8_discrete``: as ``real_b8`` with discretised viewing angles on both sides (each
+  turn one 30° step in its direction).
 * ``proc_b1``: the procedural houses ``proc-0``…``proc-4``: ours without people, ours with
   their people (``Simulator(humans=True)``, every action runs the collision check), MatterSim.
 * ``proc0_30people``: ``proc-0`` alone, ours without people, with 30 people, MatterSim.
@@ -54,6 +56,11 @@ PROC_SCANS = [f"proc-{k}" for k in range(5)]
 WORKLOADS = {
     "real_b1": ("real", 1, [("ours", "ours", "none"), ("mattersim", "mattersim", "none")]),
     "real_b8": ("real", 8, [("ours", "ours", "none"), ("mattersim", "mattersim", "none")]),
+    "real_b8_discrete": (
+        "real",
+        8,
+        [("ours", "ours", "none"), ("mattersim", "mattersim", "none")],
+    ),
     "proc_b1": (
         "proc",
         1,
@@ -154,7 +161,7 @@ def _thirty_people(scan_id, graph, rng):
     return Crowd(people[:30])
 
 
-def _simulator(which: str, people: str, graphs: Path, batch: int):
+def _simulator(which: str, people: str, graphs: Path, batch: int, discrete: bool = False):
     if which == "mattersim":
         import MatterSim  # the peer, on PYTHONPATH in this process only
 
@@ -171,7 +178,7 @@ def _simulator(which: str, people: str, graphs: Path, batch: int):
     sim.setBatchSize(batch)
     sim.setCameraResolution(CAMERA[0], CAMERA[1])
     sim.setCameraVFOV(CAMERA[2])
-    sim.setDiscretizedViewingAngles(False)
+    sim.setDiscretizedViewingAngles(discrete)
     sim.initialize()
     return sim
 
@@ -194,7 +201,7 @@ def worker(args: argparse.Namespace) -> None:
     plan = json.loads(Path(args.plan).read_text())
     batch = len(plan["scans"][0])
     t0 = time.perf_counter()
-    sim = _simulator(args.worker, args.people, Path(args.graphs), batch)
+    sim = _simulator(args.worker, args.people, Path(args.graphs), batch, args.discrete)
     zeros = [0.0] * batch
     visited: list[str] = []
     for e in range(PLAN_EPISODES):  # untimed pass: loads everything, records the path
@@ -223,13 +230,17 @@ def worker(args: argparse.Namespace) -> None:
 # ---------------------------------------------------------------- the driver
 
 
-def _run_side(side: tuple, plan: Path, graphs: Path, peer: Path | None, seconds: float) -> dict:
+def _run_side(
+    side: tuple, plan: Path, graphs: Path, peer: Path | None, seconds: float, discrete: bool
+) -> dict:
     _, which, people = side
     env = dict(os.environ)
     if which == "mattersim":
         env["PYTHONPATH"] = str(peer)
     cmd = [sys.executable, __file__, "--worker", which, "--people", people]
     cmd += ["--plan", str(plan), "--graphs", str(graphs), "--seconds", str(seconds)]
+    if discrete:
+        cmd.append("--discrete")
     done = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=plan.parent)
     if done.returncode != 0:
         raise RuntimeError(f"{side[0]} worker failed:\n{done.stderr[-2000:]}")
@@ -247,7 +258,8 @@ def run_workload(name: str, args, tmp: Path, peer: Path | None) -> dict:
     for r in range(args.rounds):
         order = sides if r % 2 == 0 else sides[::-1]
         for side in order:
-            runs[side[0]].append(_run_side(side, plan, graphs, peer, args.seconds))
+            run = _run_side(side, plan, graphs, peer, args.seconds, name.endswith("_discrete"))
+            runs[side[0]].append(run)
     out: dict = {"batch": batch, "scans": len(ids), "rounds": args.rounds}
     for side, rows in runs.items():
         out[side] = {
@@ -288,6 +300,7 @@ def main() -> int:
     ap.add_argument("--people", default="none", help=argparse.SUPPRESS)
     ap.add_argument("--plan", help=argparse.SUPPRESS)
     ap.add_argument("--graphs", help=argparse.SUPPRESS)
+    ap.add_argument("--discrete", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.worker:
         worker(args)

@@ -125,43 +125,52 @@ class NavTable:
             UnknownViewpointError: ``vp`` is unknown or excluded.
         """
         node = self._nodes.get(vp) or self._prepare(vp)
-        found = []
+        if cos_half_hfov is None or not 0.0 <= heading < _TWO_PI:
+            return self.direct(vp, heading, elevation, cos_half_hfov)
         c, w = self._window
-        if cos_half_hfov is not None and c != cos_half_hfov:
+        if c != cos_half_hfov:
             c, w = cos_half_hfov, self._half_width(cos_half_hfov)
-        if cos_half_hfov is not None and w < _PI and 0.0 <= heading < _TWO_PI:
-            # Restricted, the usual case: the bisected window holds only neighbours with a
-            # bearing (never one straight above or below).
-            b = node.bearings
-            for order, j, ix, x, y, z, bearing, _flat, elev, dist in node.ring[
-                bisect_left(b, heading - w) : bisect_right(b, heading + w)
-            ]:
-                rel = bearing - heading
-                if rel > _PI or rel <= -_PI:
-                    rel = math.fmod(rel + _PI, _TWO_PI)
-                    rel = rel - _PI if rel > 0.0 else rel + _PI
-                if _cos(rel) >= c:
-                    rel_e = elev - elevation
-                    vp_j = ViewPoint(j, ix, x, y, z, rel, rel_e, dist)
-                    found.append((_hypot(rel, rel_e), order, vp_j))
-        else:
-            for order, j, ix, x, y, z, bearing, flat, elev, dist in node.rows:
-                rel = bearing - heading
-                if rel > _PI or rel <= -_PI:
-                    rel = math.fmod(rel + _PI, _TWO_PI)
-                    rel = rel - _PI if rel > 0.0 else rel + _PI
-                if cos_half_hfov is not None and (flat == 0.0 or math.cos(rel) < cos_half_hfov):
-                    continue
+        if w >= _PI:
+            return self.direct(vp, heading, elevation, cos_half_hfov)
+        # Restricted, the usual case: the bisected window holds only neighbours with a
+        # bearing (never one straight above or below), most often none or one.
+        b = node.bearings
+        lo, hi = bisect_left(b, heading - w), bisect_right(b, heading + w)
+        if lo == hi:
+            return [node.location]
+        found = []
+        for order, j, ix, x, y, z, bearing, _flat, elev, dist in node.ring[lo:hi]:
+            rel = bearing - heading
+            if rel > _PI or rel <= -_PI:
+                rel = math.fmod(rel + _PI, _TWO_PI)
+                rel = rel - _PI if rel > 0.0 else rel + _PI
+            if _cos(rel) >= c:
                 rel_e = elev - elevation
-                vp_j = ViewPoint(j, ix, x, y, z, rel, rel_e, dist)
-                found.append((math.hypot(rel, rel_e), order, vp_j))
-        out = [node.location]
-        if len(found) == 1:
-            out.append(found[0][2])
-        elif found:
-            found.sort()  # by angle from the view centre, ties in file order
-            out.extend(f[2] for f in found)
-        return out
+                found.append((order, ViewPoint(j, ix, x, y, z, rel, rel_e, dist)))
+        if len(found) < 2:
+            return [node.location, found[0][1]] if found else [node.location]
+        # By angle from the view centre, ties in file order.
+        ranked = sorted((_hypot(v.rel_heading, v.rel_elevation), o, v) for o, v in found)
+        return [node.location] + [r[2] for r in ranked]
+
+    def direct(
+        self, vp: str, heading: float, elevation: float, cos_half_hfov: float | None
+    ) -> list[ViewPoint]:
+        """:meth:`candidates` by MatterSim's rule applied to every neighbour in turn."""
+        node = self._nodes.get(vp) or self._prepare(vp)
+        found = []
+        for order, j, ix, x, y, z, bearing, flat, elev, dist in node.rows:
+            rel = bearing - heading
+            if rel > _PI or rel <= -_PI:
+                rel = math.fmod(rel + _PI, _TWO_PI)
+                rel = rel - _PI if rel > 0.0 else rel + _PI
+            if cos_half_hfov is not None and (flat == 0.0 or math.cos(rel) < cos_half_hfov):
+                continue
+            rel_e = elev - elevation
+            vp_j = ViewPoint(j, ix, x, y, z, rel, rel_e, dist)
+            found.append((math.hypot(rel, rel_e), order, vp_j))
+        found.sort()  # by angle from the view centre, ties in file order
+        return [node.location] + [f[2] for f in found]
 
 
 def camera_positions(graph: NavGraph) -> dict[str, tuple[float, float, float]]:

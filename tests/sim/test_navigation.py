@@ -66,3 +66,35 @@ def test_candidates_follow_mattersims_rule_on_the_real_graphs(shared_data):
     assert len(files) == 90
     seen = sum(_check(NavGraph.from_file(f), rng, 60) for f in files)
     assert seen > 3000
+
+
+def _same(a: list, b: list) -> bool:
+    """The same viewpoints in the same order with bit-identical values."""
+    fields = ("viewpointId", "ix", "x", "y", "z", "rel_heading", "rel_elevation", "rel_distance")
+    return [[getattr(v, f) for f in fields] for v in a] == [
+        [getattr(v, f) for f in fields] for v in b
+    ]
+
+
+@pytest.mark.parametrize("discretized", [False, True])
+def test_the_bearing_window_gives_the_direct_rules_answer_bit_for_bit(shared_data, discretized):
+    """The bisected window's answer is the rule's loop over every neighbour, float for float."""
+    rng = np.random.default_rng(2 + discretized)
+    files = sorted((shared_data / "mp3d_connectivity").glob("*_connectivity.json"))[::6]
+    graphs = [NavGraph.from_file(f) for f in files] + [load_scan("proc-0").graph]
+    views = 0
+    for graph in graphs:
+        table = NavTable("scan", graph)
+        for _ in range(400):
+            vp = graph.nodes[int(rng.integers(graph.num_nodes))]
+            if discretized:  # the 36 views' exact angles
+                heading = int(rng.integers(12)) * math.radians(30)
+                elevation = int(rng.integers(-1, 2)) * math.radians(30)
+            else:
+                heading = float(rng.uniform(0.0, 2 * math.pi))
+                elevation = float(rng.uniform(-0.9, 0.9))
+            cos_fov = None if rng.random() < 0.2 else math.cos(float(rng.uniform(0.2, 3.3)))
+            got = table.candidates(vp, heading, elevation, cos_fov)
+            assert _same(got, table.direct(vp, heading, elevation, cos_fov)), (vp, heading)
+            views += len(got) - 1
+    assert views > 2000
