@@ -37,6 +37,7 @@ except ImportError:  # numpy < 2
     _interp_complex = np.interp
 
 _STEPS = np.arange(4096, dtype=float)  # sample indices, for sample times
+_new = tuple.__new__  # a Proximity without its Python-level constructor (hot)
 
 
 def _linspace(t0: float, t1: float, n: int, extra: Sequence[float] = ()) -> np.ndarray:
@@ -148,6 +149,8 @@ class NearMemo:
 
     def __init__(self) -> None:
         self._seen: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+        # The last crowd asked about and its tracks: consecutive actions share a crowd.
+        self._last: tuple[Crowd | None, dict] = (None, {})
 
     def near(self, crowd: Crowd, rows: Sequence[Sequence[float]], reach: float) -> list[int]:
         """:func:`_near_rows`, remembered for straight tracks of up to three knots."""
@@ -155,9 +158,12 @@ class NearMemo:
         a, b = rows[0], rows[-1]
         if n > 3 or (n == 3 and (rows[1][1] != b[1] or rows[1][2] != b[2])):
             return _near_rows(crowd, rows, reach)
-        seen = self._seen.get(crowd)
-        if seen is None:
-            seen = self._seen[crowd] = {}
+        last, seen = self._last
+        if last is not crowd:
+            seen = self._seen.get(crowd)
+            if seen is None:
+                seen = self._seen[crowd] = {}
+            self._last = (crowd, seen)
         key = (reach, a[1], a[2], b[1], b[2])
         near = seen.get(key)
         if near is None:
@@ -218,11 +224,11 @@ def _rows(knots: np.ndarray) -> list[list[float]]:
     return np.asarray(knots, float).reshape(-1, 4).tolist()
 
 
-def _samples(rows: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
+def _samples(rows: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray | complex]:
     """Sample times of a track (as :func:`sample_knots`, unordered) and its ``x + iy`` then.
 
     The times are :func:`sample_knots`'s evenly spaced ones (``numpy.linspace``'s values),
-    then the inner knots.
+    then the inner knots. A track standing still (a turn in place) gives its one ``x + iy``.
     """
     first, last = rows[0], rows[-1]
     t0, t1 = first[0], last[0]
@@ -239,6 +245,8 @@ def _samples(rows: Sequence[Sequence[float]]) -> tuple[np.ndarray, np.ndarray]:
     a, b = complex(first[1], first[2]), complex(last[1], last[2])
     # Inner knots are samples too. A point body's two or three knots are spelt out (hot).
     if inner == 0:
+        if a == b:
+            return times, a
         knot_t, knot_xy = (t0, t1), (a, b)
     elif inner == 1:
         mid = rows[1]
@@ -271,7 +279,7 @@ def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> Non
     else:
         parts = [_samples(rows) for _, rows, _ in items]
         times = np.concatenate([p[0] for p in parts])
-        agent = np.concatenate([p[1] for p in parts])
+        agent = np.concatenate([np.broadcast_to(xy, t.shape) for t, xy in parts])
         starts = np.cumsum([0] + [len(p[0]) for p in parts[:-1]])
         earliest = min(rows[0][0] for _, rows, _ in items)
         latest = max(rows[-1][0] for _, rows, _ in items)
@@ -290,9 +298,9 @@ def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> Non
         smallest = min(row)
         if smallest <= distance:
             hit = tuple([k for k, v in zip(index, row, strict=True) if v <= distance])
-            out[slot] = Proximity(True, hit, smallest if smallest < NEAR_M else math.inf)
+            out[slot] = _new(Proximity, (True, hit, smallest if smallest < NEAR_M else math.inf))
         elif smallest < NEAR_M:
-            out[slot] = Proximity(False, (), smallest)
+            out[slot] = _new(Proximity, (False, (), smallest))
 
 
 def track_proximity(
