@@ -203,7 +203,11 @@ class Batch:
                     heading += TWO_PI
                     if heading >= TWO_PI:
                         heading = 0.0
-                elevation, index = min(max(el.elevation + de, lo), hi), 0
+                elevation, index = el.elevation + de, 0
+                if elevation < lo:  # clamped, without min/max calls (hot)
+                    elevation = lo
+                elif elevation > hi:
+                    elevation = hi
             target = el.navigable[k].viewpointId
             wait_s = WAIT_S if waits is None else waits[n]
             outcome = el.body.move(target, heading, elevation, el.time, wait_s, el.film)

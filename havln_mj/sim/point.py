@@ -204,7 +204,10 @@ class GraphPointBody:
         if dh <= 0.0:
             dh += _TWO_PI
         dh -= _PI
-        turn = max(abs(dh), abs(elevation - self.elevation))
+        turn = dh if dh >= 0.0 else -dh  # max(|dh|, |de|) without builtin calls (hot)
+        de = elevation - self.elevation
+        if de > turn or -de > turn:
+            turn = de if de >= 0.0 else -de
         duration = move_s + turn / kind.turn_rate
         if duration == 0.0:
             duration = wait_s
