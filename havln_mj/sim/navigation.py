@@ -36,6 +36,11 @@ _MARGIN = 1e-9  # radians: the bisection window is this much wider than the fiel
 _Neighbour = tuple[int, str, int, float, float, float, float, float, float, float]
 
 
+def _rank(v: ViewPoint) -> tuple[float, int]:
+    """Angle from the view centre, ties in file order (neighbours are listed in file order)."""
+    return (_hypot(v.rel_heading, v.rel_elevation), v.ix)
+
+
 class _Node:
     """One viewpoint's own location and its neighbours, ready for queries."""
 
@@ -138,20 +143,17 @@ class NavTable:
         lo, hi = bisect_left(b, heading - w), bisect_right(b, heading + w)
         if lo == hi:
             return [node.location]
-        found = []
-        for order, j, ix, x, y, z, bearing, _flat, elev, dist in node.ring[lo:hi]:
+        out = [node.location]
+        for _order, j, ix, x, y, z, bearing, _flat, elev, dist in node.ring[lo:hi]:
             rel = bearing - heading
             if rel > _PI or rel <= -_PI:
                 rel = math.fmod(rel + _PI, _TWO_PI)
                 rel = rel - _PI if rel > 0.0 else rel + _PI
             if _cos(rel) >= c:
-                rel_e = elev - elevation
-                found.append((order, ViewPoint(j, ix, x, y, z, rel, rel_e, dist)))
-        if len(found) < 2:
-            return [node.location, found[0][1]] if found else [node.location]
-        # By angle from the view centre, ties in file order.
-        ranked = sorted((_hypot(v.rel_heading, v.rel_elevation), o, v) for o, v in found)
-        return [node.location] + [r[2] for r in ranked]
+                out.append(ViewPoint(j, ix, x, y, z, rel, elev - elevation, dist))
+        if len(out) > 2:
+            out[1:] = sorted(out[1:], key=_rank)
+        return out
 
     def direct(
         self, vp: str, heading: float, elevation: float, cos_half_hfov: float | None
