@@ -252,11 +252,13 @@ class Batch:
         """
         contacts: list[Proximity | None]
         if self.rule.check == "action":
+            if len(moved) == 1:  # a batch of one (hot)
+                el, outcome = moved[0][0], moved[0][1]
+                contact = knots_proximity(el.crowd, outcome.knots, self.rule.threshold, self._near)
+                self._settle(*moved[0], contact, starting)
+                return
             tracks = [(m[0].crowd, m[1].knots) for m in moved]
             contacts = batch_proximity(tracks, self.rule.threshold, self._near)
-            if len(moved) == 1:  # a batch of one (hot)
-                self._settle(*moved[0], contacts[0], starting)
-                return
         else:
             contacts = [None if m[0].people else NO_PROXIMITY for m in moved]
         for m, contact in zip(moved, contacts, strict=True):

@@ -125,6 +125,7 @@ def knots_proximity(
     crowd: Crowd,
     knots: np.ndarray | Sequence[Sequence[float]],
     distance: float = COLLISION_DISTANCE,
+    memo: NearMemo | None = None,
 ) -> Proximity:
     """The collision signal of a body's track, people far from it left out.
 
@@ -133,8 +134,20 @@ def knots_proximity(
         knots: The track of the body's base: rows ``(t, x, y, z)``, linear between rows (one
             row: an instant, e.g. an episode's start state).
         distance: Collision threshold (metres, horizontal).
+        memo: Remembers who is near which track.
     """
-    return batch_proximity([(crowd, knots)], distance)[0]
+    reach = NEAR_M if distance <= NEAR_M else distance
+    rows = knots if type(knots) is tuple or type(knots) is list else _rows(knots)
+    near = memo.near(crowd, rows, reach) if memo else _near_rows(crowd, rows, reach)
+    if not near:
+        return NO_PROXIMITY
+    table = getattr(crowd, "pelvis_table", None)
+    if table is None:
+        times, positions = sample_knots(np.asarray(rows, float).reshape(-1, 4))
+        return track_proximity(crowd, times, positions, distance, near)
+    out = [NO_PROXIMITY]
+    _tabulated(table(), [(0, rows, near)], distance, out)
+    return out[0]
 
 
 class NearMemo:
@@ -185,20 +198,9 @@ def batch_proximity(
     :mod:`havln_mj.humans.tracks`) are sampled together in one vectorised pass; other crowds
     are asked for positions track by track. ``memo`` remembers who is near which track.
     """
+    if len(tracks) == 1:  # a batch of one: no grouping
+        return [knots_proximity(*tracks[0], distance, memo)]
     reach = NEAR_M if distance <= NEAR_M else distance
-    if len(tracks) == 1:  # a batch of one: no grouping (hot)
-        crowd, knots = tracks[0]
-        rows = knots if type(knots) is tuple or type(knots) is list else _rows(knots)
-        near = memo.near(crowd, rows, reach) if memo else _near_rows(crowd, rows, reach)
-        if not near:
-            return [NO_PROXIMITY]
-        table = getattr(crowd, "pelvis_table", None)
-        if table is None:
-            times, positions = sample_knots(np.asarray(rows, float).reshape(-1, 4))
-            return [track_proximity(crowd, times, positions, distance, near)]
-        out = [NO_PROXIMITY]
-        _tabulated(table(), [(0, rows, near)], distance, out)
-        return out
     out = [NO_PROXIMITY] * len(tracks)
     groups: dict[int, tuple[Crowd, list]] = {}
     for slot, (crowd, knots) in enumerate(tracks):
