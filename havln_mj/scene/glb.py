@@ -62,52 +62,58 @@ def read_own_glb(path: Path, max_texture_size: int | None) -> list[Piece] | None
     """The pieces of a ``.glb`` written by ``write_glb``, or None for any other file.
 
     Pieces come in the order trimesh walks the nodes (last root first), each named after
-    its mesh; pieces whose images decode to the same pixels share one texture array.
+    its mesh; pieces whose images decode to the same pixels share one texture array. Only
+    the JSON chunk of a file that is not ours is read.
 
     Raises:
-        CorruptMeshError: The file claims to be ours but its container, buffer ranges,
-            indices or images are broken.
+        CorruptMeshError: The file is marked as ours but its buffer, buffer ranges, indices
+            or images are broken.
     """
-    data = path.read_bytes()
-    if data[:4] != _MAGIC:
-        return None
-    header, binary = _container(data, path)
+    with path.open("rb") as file:
+        start = file.read(20)
+        if len(start) < 20 or start[:4] != _MAGIC:
+            return None
+        version, length, size, kind = struct.unpack_from("<IIII", start, 4)
+        if version != 2 or kind != _JSON_CHUNK:
+            return None
+        try:
+            header = json.loads(file.read(size))
+            scene = header["scenes"][header.get("scene", 0)]
+            if scene.get("extras") != MARKER:
+                return None
+        except (ValueError, KeyError, IndexError, TypeError, AttributeError):
+            return None
+        rest = file.read()
+    if 20 + size + len(rest) < length:
+        raise CorruptMeshError(f"{path}: the GLB header says {length} bytes, the file is shorter")
     try:
-        return _Reader(header, binary, path, max_texture_size).pieces()
+        return _Reader(header, _bin_chunk(rest, path), path, max_texture_size).pieces()
     except _OutsideError:
         return None
     except (KeyError, IndexError, TypeError, ValueError) as exc:
         raise CorruptMeshError(f"{path}: malformed glTF ({type(exc).__name__}: {exc})") from exc
 
 
-def _container(data: bytes, path: Path) -> tuple[dict[str, Any], bytes]:
-    """The JSON header and the BIN chunk of a GLB file."""
-    if len(data) < 20:
-        raise CorruptMeshError(f"{path}: a GLB file is at least 20 bytes, got {len(data)}")
-    version, length = struct.unpack_from("<II", data, 4)
-    if version != 2:
-        raise CorruptMeshError(f"{path}: GLB version {version}, expected 2")
-    if length > len(data):
-        raise CorruptMeshError(
-            f"{path}: the GLB header says {length} bytes, the file has {len(data)}"
-        )
-    chunks: dict[int, bytes] = {}
-    at = 12
-    while at + 8 <= length:
-        size, kind = struct.unpack_from("<II", data, at)
-        if at + 8 + size > length:
-            raise CorruptMeshError(f"{path}: a GLB chunk runs past the end of the file")
-        chunks.setdefault(kind, data[at + 8 : at + 8 + size])
-        at += 8 + size
-    if _JSON_CHUNK not in chunks:
-        raise CorruptMeshError(f"{path}: the GLB file has no JSON chunk")
-    try:
-        header = json.loads(chunks[_JSON_CHUNK])
-    except ValueError as exc:
-        raise CorruptMeshError(f"{path}: the GLB JSON chunk does not parse ({exc})") from exc
-    if not isinstance(header, dict):
-        raise CorruptMeshError(f"{path}: the GLB JSON chunk is not an object")
-    return header, chunks.get(_BIN_CHUNK, b"")
+def _bin_chunk(rest: bytes, path: Path) -> bytes:
+    """The BIN chunk's bytes from what follows the JSON chunk (empty when there is none)."""
+    if len(rest) < 8:
+        return b""
+    size, kind = struct.unpack_from("<II", rest)
+    if kind != _BIN_CHUNK:
+        raise _OutsideError
+    if 8 + size > len(rest):
+        raise CorruptMeshError(f"{path}: the GLB BIN chunk runs past the end of the file")
+    return rest[8 : 8 + size]
+
+
+def first_alike(texture: np.ndarray, seen: dict[tuple, np.ndarray]) -> np.ndarray:
+    """The first array in ``seen`` with ``texture``'s pixels (``texture``, and noted, if none).
+
+    glTF materials that share an image may each get their own copy of it: drawing them with
+    one array lets the world builder upload it, and merge the parts using it, once.
+    """
+    digest = (texture.shape, hashlib.blake2b(texture.data).digest())
+    return seen.setdefault(digest, texture)
 
 
 class _Reader:
@@ -127,8 +133,6 @@ class _Reader:
         if any("uri" in b for b in h.get("buffers", [])):
             raise _OutsideError
         scene = h["scenes"][h.get("scene", 0)]
-        if scene.get("extras") != MARKER:
-            raise _OutsideError
         roots = scene.get("nodes", [])
         nodes = [h["nodes"][i] for i in roots]
         names = [m.get("name") for m in h.get("meshes", [])]
@@ -235,9 +239,9 @@ class _Reader:
             raise CorruptMeshError(
                 f"{self.path}: cannot read image {index} ({type(exc).__name__}: {exc})"
             ) from exc
-        texture = image_array(image, self.path, self.max_size)
-        digest = (texture.shape, hashlib.blake2b(texture.data).digest())
-        texture = self.images[index] = self.same_image.setdefault(digest, texture)
+        texture = self.images[index] = first_alike(
+            image_array(image, self.path, self.max_size), self.same_image
+        )
         return texture
 
     def _view_range(self, view: dict[str, Any]) -> tuple[int, int]:

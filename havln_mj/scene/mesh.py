@@ -29,7 +29,6 @@ takes the file's +y (up) to +z.
 
 from __future__ import annotations
 
-import hashlib
 import io
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,7 +39,7 @@ import numpy as np
 from havln_mj.cache import atomic_write_bytes
 from havln_mj.errors import CorruptMeshError, InvalidArgumentError, MissingDataError
 from havln_mj.scene.boxes import BoxSet
-from havln_mj.scene.glb import Piece, read_own_glb
+from havln_mj.scene.glb import Piece, first_alike, read_own_glb
 from havln_mj.scene.materials import finish_of, image_array, image_of, rgba_of
 
 if TYPE_CHECKING:
@@ -273,8 +272,7 @@ def _trimesh_pieces(path: Path, max_texture_size: int | None) -> list[Piece]:
             if texture is None:
                 texture = images[id(image)] = image_array(image, path, max_texture_size)
                 if by_node:  # glTF materials sharing an image each get their own PIL copy
-                    digest = (texture.shape, hashlib.blake2b(texture.data).digest())
-                    texture = images[id(image)] = same_image.setdefault(digest, texture)
+                    texture = images[id(image)] = first_alike(texture, same_image)
             if not isinstance(material, trimesh.visual.material.PBRMaterial):
                 rgba = (1.0, 1.0, 1.0, rgba[3])  # an OBJ's Kd does not tint its map_Kd here
         shine, emission = finish_of(geom)

@@ -111,8 +111,10 @@ def test_a_broken_file_of_ours_is_reported(tmp_path):
     _edit_json(path, lambda h: accessor(h, "POSITION").update(count=2))
     with pytest.raises(CorruptMeshError, match="indexes vertex 3 of 2"):
         load_mesh_parts(path)
-    path.write_bytes(path.read_bytes()[:40])
-    with pytest.raises(CorruptMeshError, match=r"the GLB header says .* bytes, the file has 40"):
+    path.write_bytes(path.read_bytes()[:-100])
+    with pytest.raises(
+        CorruptMeshError, match=r"the GLB header says \d+ bytes, the file is shorter"
+    ):
         load_mesh_parts(path)
 
 
