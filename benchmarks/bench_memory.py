@@ -8,7 +8,10 @@ resident set size (``/proc/self/statm``) over a baseline taken in the same proce
 * ``rendering_off``: one simulator, rendering off, the 90 real graphs preloaded (``--data``),
   a short random walk; then ``--extra`` more simulators doing the same: the memory each
   extra one adds (graphs are shared in a process).
-* ``rendering_on``: one simulator on ``proc-0`` with its people, 640×480 RGB-D, a short walk.
+* ``rendering_on``: one simulator on ``proc-0`` with its people, 640×480 RGB-D, a short walk;
+  its resident set split (``/proc/self/smaps``) into anonymous memory (heap: model, GL
+  textures, arrays) and file-backed pages (shared libraries), of which the OpenGL driver's
+  (Mesa llvmpipe and its LLVM: a fixed cost shared by every process that renders).
 
 Prints one JSON object. Run: ``python benchmarks/bench_memory.py``.
 """
@@ -32,6 +35,25 @@ SHARED_DATA = Path(
 def _rss_mb() -> float:
     pages = int(Path("/proc/self/statm").read_text().split()[1])
     return pages * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+GL_DRIVER = ("libLLVM", "_dri.so", "libgallium", "libEGL", "libGL", "libglapi")
+
+
+def _rss_split_mb() -> dict[str, float]:
+    """Resident MB by kind: anonymous, file-backed, and the GL driver's part of the latter."""
+    kb = {"anonymous": 0, "file": 0, "gl_driver": 0}
+    path = ""
+    for line in Path("/proc/self/smaps").read_text().splitlines():
+        head = line.split(maxsplit=5)
+        if "-" in head[0] and len(head) >= 5:  # a mapping's first line
+            path = head[5] if len(head) > 5 else ""
+        elif head[0] == "Rss:":
+            kind = "file" if path.startswith("/") else "anonymous"
+            kb[kind] += int(head[1])
+            if kind == "file" and any(name in path for name in GL_DRIVER):
+                kb["gl_driver"] += int(head[1])
+    return {f"rss_{k}_mb": round(v / 1024, 1) for k, v in kb.items()}
 
 
 def _walk(sim, scans: list[str], steps: int, seed: int) -> None:
@@ -91,6 +113,7 @@ def case(name: str, data: Path, extra: int) -> dict:
         out["people"] = len(sim.getHumanState()[0])
         out["simulator_rss_mb"] = round(_rss_mb(), 1)
         out["simulator_over_baseline_mb"] = round(_rss_mb() - base, 1)
+        out.update(_rss_split_mb())
     out["heavy_modules"] = sorted(m for m in HEAVY if m in sys.modules)
     out["baseline_rss_mb"] = round(base, 1)
     return out

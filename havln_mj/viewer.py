@@ -24,6 +24,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Sequence
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -134,6 +135,9 @@ def run_viewer(
     frames: int | None = None,
     keys: Sequence[int] = (),
     launch: Callable | None = None,
+    human_placements: str | Path | None = None,
+    mp3d_dir: str | Path | None = None,
+    connectivity_dir: str | Path | None = None,
 ) -> int:
     """Opens the live viewer; returns the number of frames shown.
 
@@ -145,6 +149,10 @@ def run_viewer(
         frames: Stop after this many frames (None: until the window closes).
         keys: GLFW key codes to press before any typed ones (scripted sessions, tests).
         launch: The viewer launcher (default ``mujoco.viewer.launch_passive``).
+        human_placements: HA3D placement file for real scans (default
+            ``$HAVLN_HA3D_PLACEMENTS``; without one, people are placed by HA3D's rule).
+        mp3d_dir: Matterport3D data root (default ``$HAVLN_MP3D_DIR``).
+        connectivity_dir: Folder of connectivity graphs (default ``$HAVLN_CONNECTIVITY_DIR``).
     """
     from havln_mj.sim.simulator import Simulator
 
@@ -152,7 +160,11 @@ def run_viewer(
         isinstance(frames, bool) or not isinstance(frames, int) or frames < 1
     ):
         raise InvalidArgumentError(f"frames must be None or an int ≥ 1, got {frames!r}")
-    sim = Simulator(humans=humans, body=body)
+    sim = Simulator(humans=humans, body=body, human_placements=human_placements)
+    if mp3d_dir is not None:
+        sim.setDatasetPath(mp3d_dir)
+    if connectivity_dir is not None:
+        sim.setNavGraphPath(connectivity_dir)
     sim.setRenderingEnabled(False)
     sim.setRestrictedNavigation(False)
     sim.setSeed(seed)
@@ -209,6 +221,24 @@ def parser(prog: str = "havln_mj view") -> argparse.ArgumentParser:
         default="",
         help="comma-separated keys to press first: up, left, right, page_up, page_down, space",
     )
+    p.add_argument(
+        "--human-placements",
+        type=Path,
+        default=None,
+        help="HA3D placement file for real scans (default $HAVLN_HA3D_PLACEMENTS)",
+    )
+    p.add_argument(
+        "--mp3d-dir",
+        type=Path,
+        default=None,
+        help="Matterport3D data root (raw or habitat layout; default $HAVLN_MP3D_DIR)",
+    )
+    p.add_argument(
+        "--connectivity-dir",
+        type=Path,
+        default=None,
+        help="folder of <scan>_connectivity.json graphs (default $HAVLN_CONNECTIVITY_DIR)",
+    )
     return p
 
 
@@ -223,6 +253,9 @@ def _problems(args: argparse.Namespace) -> list[str | None]:
         argchecks.in_range("--seed", args.seed, 0),
         None if args.frames is None else argchecks.in_range("--frames", args.frames, 1),
         argchecks.scene_ids("--scene", [args.scene]),
+        argchecks.existing("--human-placements", args.human_placements, "file"),
+        argchecks.existing("--mp3d-dir", args.mp3d_dir),
+        argchecks.existing("--connectivity-dir", args.connectivity_dir),
         "the viewer needs a display: $DISPLAY is not set (on a headless machine run it under "
         "a virtual one: xvfb-run havln_mj view ...)"
         if headless
@@ -246,6 +279,9 @@ def main(argv: Sequence[str] | None = None, prog: str = "havln_mj view") -> int:
             seed=args.seed,
             frames=args.frames,
             keys=[_GLFW[k] for k in keys],
+            human_placements=args.human_placements,
+            mp3d_dir=args.mp3d_dir,
+            connectivity_dir=args.connectivity_dir,
         )
     except HavlnError as exc:
         print(f"error: {exc}", file=sys.stderr)

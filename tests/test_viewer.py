@@ -37,6 +37,22 @@ def test_the_viewer_opens_and_the_keys_move_the_agent(display, body):
     assert "viewer closed after 12 frames" in proc.stdout
 
 
+def test_the_viewer_opens_a_real_scan_with_its_placements(display, shared_data):
+    env = {**os.environ, "DISPLAY": display, "MUJOCO_GL": "glfw"}
+    cmd = [sys.executable, "-m", "havln_mj.cli", "view", "--scene", "17DRP5sb8fy", "--frames", "3"]
+    cmd += ["--connectivity-dir", str(shared_data / "mp3d_connectivity")]
+    cmd += ["--human-placements", str(shared_data / "ha3d" / "human_placements.json")]
+    proc = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert "viewer closed after 3 frames" in proc.stdout
+
+
+def test_the_viewer_names_a_missing_placement_file(tmp_path):
+    cmd = [sys.executable, "-m", "havln_mj.cli", "view", "--human-placements", str(tmp_path / "x")]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and "--human-placements" in proc.stderr
+
+
 class _FakeSim:
     def __init__(self, robot: bool):
         self.robot_actions = ("forward", "turn_left", "turn_right") if robot else ()

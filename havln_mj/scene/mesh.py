@@ -12,14 +12,14 @@ Conventions of :class:`MeshPart`:
 
 - ``vertices`` are in the z-up world frame (Matterport's frame: metres, +z up).
 - ``uv`` follows the OBJ convention: ``(0, 0)`` is the bottom-left corner of the image and
-  ``v`` grows upwards. trimesh already converts glTF's top-left origin to this on load.
+  ``v`` grows upwards (glTF's top-left origin is converted on load).
 - ``texture`` is an H×W×3 ``uint8`` RGB (or H×W×4 RGBA, for blended overlays) image stored
   top row first (as PIL and image files store it). :func:`havln_mj.sim.visual.add_visual_parts`
   converts to MuJoCo's convention.
 - ``shine`` and ``emission`` travel through glTF as ``1 − roughnessFactor`` and
   ``emissiveFactor``; an alpha below 1 in ``rgba`` as ``alphaMode: BLEND``.
 
-Up axis: trimesh applies no axis conversion when reading glTF, so a ``.glb`` comes back in the
+Up axis: no axis conversion is applied when reading glTF, so a ``.glb`` comes back in the
 frame its vertices were written in. The meshes this project writes and the Matterport3D
 meshes (raw ``.obj`` and habitat ``.glb``, which habitat-sim reads as "gravity −z") are all
 z-up, the default ``up="z"``. A file exported y-up (glTF's own convention, e.g. by Blender)
@@ -29,7 +29,6 @@ takes the file's +y (up) to +z.
 
 from __future__ import annotations
 
-import hashlib
 import io
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,6 +39,7 @@ import numpy as np
 from havln_mj.cache import atomic_write_bytes
 from havln_mj.errors import CorruptMeshError, InvalidArgumentError, MissingDataError
 from havln_mj.scene.boxes import BoxSet
+from havln_mj.scene.glb import Piece, first_alike, read_own_glb
 from havln_mj.scene.materials import finish_of, image_array, image_of, rgba_of
 
 if TYPE_CHECKING:
@@ -185,10 +185,10 @@ def load_mesh_parts(
 ) -> list[MeshPart]:
     """Reads a ``.glb`` / ``.gltf`` / ``.obj`` mesh as world-space parts.
 
-    A file written by :func:`write_glb` gives one part per node, named after it; any other
-    file one part per material. Textured materials (an OBJ ``map_Kd`` or a glTF base colour
-    texture) give parts with per-vertex UVs and the image as an array; reading images needs
-    Pillow. Each image is
+    A file written by :func:`write_glb` gives one part per node, named after it (read by
+    :func:`havln_mj.scene.glb.read_own_glb`, without trimesh); any other file one part per
+    material. Textured materials (an OBJ ``map_Kd`` or a glTF base colour texture) give parts
+    with per-vertex UVs and the image as an array; reading images needs Pillow. Each image is
     converted once, however many pieces of the file use it.
 
     Args:
@@ -203,11 +203,17 @@ def load_mesh_parts(
         MissingDataError: The file does not exist.
         CorruptMeshError: The file or a texture cannot be parsed, or it holds no triangles.
     """
-    scene = _read_scene(path, up, max_texture_size)
-    out = [
-        _merged(name, chunks)
-        for (name, _), chunks in _chunks(scene, path, up, max_texture_size).items()
-    ]
+    _check_arguments(path, up, max_texture_size)
+    pieces = read_own_glb(path, max_texture_size) if path.suffix.lower() == ".glb" else None
+    if pieces is None:
+        pieces = _trimesh_pieces(path, max_texture_size)
+    if up == "y":
+        pieces = [p._replace(vertices=p.vertices @ _Y_UP_TO_Z_UP.T) for p in pieces]
+    groups: dict[tuple[str, int], list[Piece]] = {}
+    for piece in pieces:
+        key = (piece.name, id(piece.texture) if piece.texture is not None else 0)
+        groups.setdefault(key, []).append(piece)
+    out = [_merged(name, group) for (name, _), group in groups.items()]
     if not out:
         raise CorruptMeshError(f"{path}: the mesh holds no triangles")
     for part in out:
@@ -218,10 +224,8 @@ def load_mesh_parts(
     return out
 
 
-def _read_scene(path: Path, up: str, max_texture_size: int | None) -> trimesh.Scene:
-    """The file as a trimesh scene, after checking the arguments."""
-    import trimesh  # a large import: only when meshes are read or written
-
+def _check_arguments(path: Path, up: str, max_texture_size: int | None) -> None:
+    """Raises the errors :func:`load_mesh_parts` documents for its arguments."""
     if up not in UP_AXES:
         raise InvalidArgumentError(f"up must be one of {UP_AXES}, got {up!r}")
     if max_texture_size is not None and not (
@@ -232,38 +236,32 @@ def _read_scene(path: Path, up: str, max_texture_size: int | None) -> trimesh.Sc
         )
     if not path.is_file():
         raise MissingDataError(f"mesh not found: {path}")
+
+
+def _trimesh_pieces(path: Path, max_texture_size: int | None) -> list[Piece]:
+    """A file's triangles in world space, one piece per node geometry, read by trimesh."""
+    import trimesh  # a large import: only for meshes this package did not write
+
     try:
-        return trimesh.load(path, force="scene", process=False)
+        scene = trimesh.load(path, force="scene", process=False)
     except Exception as exc:  # trimesh raises many types for bad files
         raise CorruptMeshError(f"{path}: cannot read mesh ({type(exc).__name__}: {exc})") from exc
-
-
-def _chunks(
-    scene: trimesh.Scene, path: Path, up: str, max_texture_size: int | None
-) -> dict[tuple[str, int], list]:
-    """The scene's triangles in world space, grouped by part name and texture.
-
-    Each chunk is ``(vertices, faces, uv or None, texture or None, geometry)``.
-    """
-    import trimesh
-
     by_node = scene.metadata.get("havln_mj", {}).get("parts") == "node"
     images: dict[int, np.ndarray] = {}  # id(PIL image) -> array, so shared images convert once
     same_image: dict[tuple, np.ndarray] = {}
-    parts: dict[tuple[str, int], list] = {}
+    pieces = []
     for node in scene.graph.nodes_geometry:
         transform, geom_name = scene.graph[node]
         geom = scene.geometry[geom_name]
         if not isinstance(geom, trimesh.Trimesh) or len(geom.faces) == 0:
             continue
         verts = trimesh.transformations.transform_points(geom.vertices, transform)
-        if up == "y":
-            verts = verts @ _Y_UP_TO_Z_UP.T
         material = getattr(geom.visual, "material", None)
         name = geom_name if by_node else getattr(material, "name", None) or geom_name
         image = image_of(geom)
         uv = None
         texture = None
+        rgba = rgba_of(geom)
         if image is not None:
             uv = np.asarray(geom.visual.uv, dtype=np.float32)
             if uv.shape != (len(verts), 2):
@@ -274,31 +272,25 @@ def _chunks(
             if texture is None:
                 texture = images[id(image)] = image_array(image, path, max_texture_size)
                 if by_node:  # glTF materials sharing an image each get their own PIL copy
-                    digest = (texture.shape, hashlib.blake2b(texture.data).digest())
-                    texture = images[id(image)] = same_image.setdefault(digest, texture)
-        key = (name, id(texture) if texture is not None else 0)
-        parts.setdefault(key, []).append((verts, np.asarray(geom.faces), uv, texture, geom))
-    return parts
+                    texture = images[id(image)] = first_alike(texture, same_image)
+            if not isinstance(material, trimesh.visual.material.PBRMaterial):
+                rgba = (1.0, 1.0, 1.0, rgba[3])  # an OBJ's Kd does not tint its map_Kd here
+        shine, emission = finish_of(geom)
+        pieces.append(
+            Piece(name, verts, np.asarray(geom.faces), uv, texture, rgba, shine, emission)
+        )
+    return pieces
 
 
-def _merged(name: str, chunks: list) -> MeshPart:
-    """One part from its chunks (see :func:`_chunks`)."""
-    import trimesh
-
-    offsets = np.cumsum([0] + [len(c[0]) for c in chunks[:-1]])
-    verts = np.concatenate([c[0] for c in chunks])
-    faces = np.concatenate([c[1] + o for c, o in zip(chunks, offsets, strict=True)])
-    texture = chunks[0][3]
-    uv = None if texture is None else np.concatenate([c[2] for c in chunks])
-    rgba = rgba_of(chunks[0][4])
-    if texture is not None and not isinstance(
-        chunks[0][4].visual.material, trimesh.visual.material.PBRMaterial
-    ):
-        rgba = (1.0, 1.0, 1.0, rgba[3])  # an OBJ's Kd does not tint its map_Kd here
-    verts = verts.astype(float, copy=False)
-    shine, emission = finish_of(chunks[0][4])
+def _merged(name: str, pieces: list[Piece]) -> MeshPart:
+    """One part from the pieces of one name and texture (the first piece's look)."""
+    first = pieces[0]
+    offsets = np.cumsum([0] + [len(p.vertices) for p in pieces[:-1]])
+    verts = np.concatenate([p.vertices for p in pieces]).astype(float, copy=False)
+    faces = np.concatenate([p.faces + o for p, o in zip(pieces, offsets, strict=True)])
+    uv = None if first.texture is None else np.concatenate([p.uv for p in pieces])
     faces = faces.astype(np.int32, copy=False)
-    return MeshPart(name, verts, faces, rgba, uv, texture, shine, emission)
+    return MeshPart(name, verts, faces, first.rgba, uv, first.texture, first.shine, first.emission)
 
 
 def merge_parts(parts: list[MeshPart], name: str) -> MeshPart:

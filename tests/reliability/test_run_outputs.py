@@ -50,7 +50,8 @@ def _copy(folder: Path, to: Path) -> dict[str, bytes]:
 
 def _start_rerun(out: Path, *extra: str) -> subprocess.Popen:
     return subprocess.Popen(
-        [sys.executable, "-m", *RUN, "--episodes", "3", "--out", str(out), *extra],
+        # Many episodes: the run must still be going when the test interrupts it.
+        [sys.executable, "-m", *RUN, "--episodes", "20", "--out", str(out), *extra],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
         text=True,
