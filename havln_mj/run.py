@@ -151,7 +151,9 @@ def parser(prog: str = PROG) -> argparse.ArgumentParser:
     _add_view_flags(p)
     _add_people_flags(p)
     _add_robot_flags(p)
-    _add_data_flags(p)
+    argchecks.add_data_flags(
+        p, "--human-placements", "--haps-dir", "--smpl-model", "--mp3d-dir", "--connectivity-dir"
+    )
     return p
 
 
@@ -224,40 +226,6 @@ def _add_robot_flags(p: argparse.ArgumentParser) -> None:
         type=float,
         default=None,
         help="raise the GO1's camera on a mast to this height (m); default: its head camera",
-    )
-
-
-def _add_data_flags(p: argparse.ArgumentParser) -> None:
-    """Where the licensed data is (each defaults to an environment variable)."""
-    p.add_argument(
-        "--human-placements",
-        type=Path,
-        default=None,
-        help="HA3D placement file for real scans (default $HAVLN_HA3D_PLACEMENTS)",
-    )
-    p.add_argument(
-        "--haps-dir",
-        type=Path,
-        default=None,
-        help="HAPS motion folder to play instead of built-in motions (default $HAVLN_HAPS_DIR)",
-    )
-    p.add_argument(
-        "--smpl-model",
-        type=Path,
-        default=None,
-        help="SMPL model file to draw people as skinned meshes (default $HAVLN_SMPL_MODEL)",
-    )
-    p.add_argument(
-        "--mp3d-dir",
-        type=Path,
-        default=None,
-        help="Matterport3D data root (raw or habitat layout; default $HAVLN_MP3D_DIR)",
-    )
-    p.add_argument(
-        "--connectivity-dir",
-        type=Path,
-        default=None,
-        help="folder of <scan>_connectivity.json graphs (default $HAVLN_CONNECTIVITY_DIR)",
     )
 
 
