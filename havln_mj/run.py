@@ -32,6 +32,7 @@ from havln_mj import __version__, argchecks
 from havln_mj.errors import HavlnError, InvalidArgumentError
 from havln_mj.frames import heading_to
 from havln_mj.recording import OUTPUTS, Recording, staged_outputs
+from havln_mj.robot.go1.constants import CONTROLLERS
 from havln_mj.scene.ids import parse_scene_id
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.procedural.recipe import load_recipe
@@ -84,7 +85,11 @@ def make_simulator(args: argparse.Namespace, body: str):
         human_motions=args.haps_dir,
         smpl_model=args.smpl_model,
         body=body,
-        legged=LeggedOptions(estimate=args.go1_estimate, camera_height=args.go1_camera_height),
+        legged=LeggedOptions(
+            estimate=args.go1_estimate,
+            camera_height=args.go1_camera_height,
+            controller=args.go1_controller,
+        ),
         together=args.together,
         reactions=not args.no_reactions,
     )
@@ -220,6 +225,12 @@ def _add_robot_flags(p: argparse.ArgumentParser) -> None:
         choices=("truth", "odometry"),
         default="truth",
         help="what the GO1's primitives are closed on (default: ground truth)",
+    )
+    p.add_argument(
+        "--go1-controller",
+        choices=CONTROLLERS,
+        default="trot",
+        help="the GO1's gait: trot (blind, flat floors; default) or terrain (height scan)",
     )
     p.add_argument(
         "--go1-camera-height",
