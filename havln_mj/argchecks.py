@@ -1,11 +1,13 @@
 """Checks the command-line tools run on their arguments before doing any work.
 
 Each check returns None when the value is fine, else the message to show: it names the flag,
-the value and what would be valid.
+the value and what would be valid. :func:`add_data_flags` adds the flags that say where a
+user's licensed data is, the same in every command.
 """
 
 from __future__ import annotations
 
+import argparse
 import os
 import tempfile
 from collections.abc import Iterable
@@ -13,6 +15,27 @@ from pathlib import Path
 
 from havln_mj.errors import UnknownSceneError
 from havln_mj.scene.ids import parse_scene_id
+
+DATA_FLAGS = {
+    "--human-placements": "HA3D placement file for real scans (default $HAVLN_HA3D_PLACEMENTS)",
+    "--mp3d-dir": "Matterport3D data root (raw or habitat layout; default $HAVLN_MP3D_DIR)",
+    "--connectivity-dir": (
+        "folder of <scan>_connectivity.json graphs (default $HAVLN_CONNECTIVITY_DIR)"
+    ),
+    "--haps-dir": (
+        "HAPS motion folder to play instead of built-in motions (default $HAVLN_HAPS_DIR)"
+    ),
+    "--smpl-model": (
+        "SMPL model file to draw people as skinned meshes (default $HAVLN_SMPL_MODEL)"
+    ),
+}
+"""The flags naming a user's data, with their help."""
+
+
+def add_data_flags(p: argparse.ArgumentParser, *flags: str) -> None:
+    """Adds ``flags`` (names in :data:`DATA_FLAGS`) to ``p``, as paths defaulting to None."""
+    for flag in flags:
+        p.add_argument(flag, type=Path, default=None, help=DATA_FLAGS[flag])
 
 
 def in_range(

@@ -32,6 +32,7 @@ from havln_mj import __version__, argchecks
 from havln_mj.errors import HavlnError, InvalidArgumentError
 from havln_mj.frames import heading_to
 from havln_mj.recording import OUTPUTS, Recording, staged_outputs
+from havln_mj.robot.go1.constants import CONTROLLERS
 from havln_mj.scene.ids import parse_scene_id
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.procedural.recipe import load_recipe
@@ -84,7 +85,11 @@ def make_simulator(args: argparse.Namespace, body: str):
         human_motions=args.haps_dir,
         smpl_model=args.smpl_model,
         body=body,
-        legged=LeggedOptions(estimate=args.go1_estimate, camera_height=args.go1_camera_height),
+        legged=LeggedOptions(
+            estimate=args.go1_estimate,
+            camera_height=args.go1_camera_height,
+            controller=args.go1_controller,
+        ),
         together=args.together,
         reactions=not args.no_reactions,
     )
@@ -151,7 +156,9 @@ def parser(prog: str = PROG) -> argparse.ArgumentParser:
     _add_view_flags(p)
     _add_people_flags(p)
     _add_robot_flags(p)
-    _add_data_flags(p)
+    argchecks.add_data_flags(
+        p, "--human-placements", "--haps-dir", "--smpl-model", "--mp3d-dir", "--connectivity-dir"
+    )
     return p
 
 
@@ -220,44 +227,16 @@ def _add_robot_flags(p: argparse.ArgumentParser) -> None:
         help="what the GO1's primitives are closed on (default: ground truth)",
     )
     p.add_argument(
+        "--go1-controller",
+        choices=CONTROLLERS,
+        default="trot",
+        help="the GO1's gait: trot (blind, flat floors; default) or terrain (height scan)",
+    )
+    p.add_argument(
         "--go1-camera-height",
         type=float,
         default=None,
         help="raise the GO1's camera on a mast to this height (m); default: its head camera",
-    )
-
-
-def _add_data_flags(p: argparse.ArgumentParser) -> None:
-    """Where the licensed data is (each defaults to an environment variable)."""
-    p.add_argument(
-        "--human-placements",
-        type=Path,
-        default=None,
-        help="HA3D placement file for real scans (default $HAVLN_HA3D_PLACEMENTS)",
-    )
-    p.add_argument(
-        "--haps-dir",
-        type=Path,
-        default=None,
-        help="HAPS motion folder to play instead of built-in motions (default $HAVLN_HAPS_DIR)",
-    )
-    p.add_argument(
-        "--smpl-model",
-        type=Path,
-        default=None,
-        help="SMPL model file to draw people as skinned meshes (default $HAVLN_SMPL_MODEL)",
-    )
-    p.add_argument(
-        "--mp3d-dir",
-        type=Path,
-        default=None,
-        help="Matterport3D data root (raw or habitat layout; default $HAVLN_MP3D_DIR)",
-    )
-    p.add_argument(
-        "--connectivity-dir",
-        type=Path,
-        default=None,
-        help="folder of <scan>_connectivity.json graphs (default $HAVLN_CONNECTIVITY_DIR)",
     )
 
 

@@ -221,24 +221,7 @@ def parser(prog: str = "havln_mj view") -> argparse.ArgumentParser:
         default="",
         help="comma-separated keys to press first: up, left, right, page_up, page_down, space",
     )
-    p.add_argument(
-        "--human-placements",
-        type=Path,
-        default=None,
-        help="HA3D placement file for real scans (default $HAVLN_HA3D_PLACEMENTS)",
-    )
-    p.add_argument(
-        "--mp3d-dir",
-        type=Path,
-        default=None,
-        help="Matterport3D data root (raw or habitat layout; default $HAVLN_MP3D_DIR)",
-    )
-    p.add_argument(
-        "--connectivity-dir",
-        type=Path,
-        default=None,
-        help="folder of <scan>_connectivity.json graphs (default $HAVLN_CONNECTIVITY_DIR)",
-    )
+    argchecks.add_data_flags(p, "--human-placements", "--mp3d-dir", "--connectivity-dir")
     return p
 
 

@@ -23,6 +23,7 @@ import numpy as np
 import torch
 from tqdm import tqdm
 
+from havln_mj import argchecks
 from havln_mj.agents.features import FeatureStore
 from havln_mj.agents.views import REGION_CODES, ViewConfig, ViewpointViews, ViewRenderer
 from havln_mj.agents.vision import ViewEncoder, encode_views, load_resnet152, pretrain_encoder
@@ -261,18 +262,7 @@ def parser(prog: str = PROG) -> argparse.ArgumentParser:
         "--resnet152", type=Path, default=None, help="ImageNet ResNet-152 weights (instead)"
     )
     p.add_argument("--seed", type=int, default=0, help="people seed (the dataset's)")
-    p.add_argument(
-        "--connectivity-dir",
-        type=Path,
-        default=None,
-        help="folder of <scan>_connectivity.json graphs (default $HAVLN_CONNECTIVITY_DIR)",
-    )
-    p.add_argument(
-        "--human-placements",
-        type=Path,
-        default=None,
-        help="HA3D placement file for real scans (default $HAVLN_HA3D_PLACEMENTS)",
-    )
+    argchecks.add_data_flags(p, "--connectivity-dir", "--human-placements")
     return p
 
 

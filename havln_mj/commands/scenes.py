@@ -175,13 +175,7 @@ def _add_export(scenes: argparse._SubParsersAction) -> None:
     export.add_argument(
         "--solid-people", action="store_true", help="people's bodies collide (push a robot)"
     )
-    export.add_argument("--mp3d-dir", type=Path, default=None, help="Matterport3D data root")
-    export.add_argument(
-        "--connectivity-dir", type=Path, default=None, help="folder of connectivity graphs"
-    )
-    export.add_argument(
-        "--human-placements", type=Path, default=None, help="HA3D human placement file"
-    )
+    argchecks.add_data_flags(export, "--human-placements", "--mp3d-dir", "--connectivity-dir")
 
 
 def _build_problems(args: argparse.Namespace) -> list[str | None]:

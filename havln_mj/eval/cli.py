@@ -13,6 +13,7 @@ from pathlib import Path
 
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.eval.setup import AGENTS, protocol_of
+from havln_mj.robot.go1.constants import CONTROLLERS
 from havln_mj.scene.ids import expand_scene_ranges
 from havln_mj.tasks.datasets import load_dataset
 from havln_mj.tasks.episodes import Episode
@@ -76,6 +77,12 @@ def _add_agent_flags(p: argparse.ArgumentParser) -> None:
         choices=("point", "go1"),
         default="point",
         help="the agent's body: the point camera rig (default) or the simulated GO1",
+    )
+    p.add_argument(
+        "--go1-controller",
+        choices=CONTROLLERS,
+        default="trot",
+        help="the GO1's gait: trot (blind, flat floors; default) or terrain (height scan)",
     )
     p.add_argument(
         "--protocol",

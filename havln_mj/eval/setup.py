@@ -103,6 +103,15 @@ def make_agent(name: str, args: argparse.Namespace | None = None) -> AgentFactor
         raise InvalidArgumentError(f"cannot load agent {name!r}: {exc}") from None
 
 
+def _legged_options(args: argparse.Namespace) -> object | None:
+    """The GO1's options from the flags; None for the point body."""
+    if args.body != "go1":
+        return None
+    from havln_mj.sim.legged import LeggedOptions  # the GO1's physics, only when used
+
+    return LeggedOptions(controller=getattr(args, "go1_controller", "trot"))
+
+
 def evaluation_simulator(args: argparse.Namespace, film_width: int | None = None) -> Simulator:
     """The evaluation's simulator: discretised views, the protocol's rules and camera.
 
@@ -117,6 +126,7 @@ def evaluation_simulator(args: argparse.Namespace, film_width: int | None = None
         collision_rule=protocol.collision_rule,
         human_clock=protocol.human_clock,
         pinned_people=getattr(args, "pinned_people", False),
+        legged=_legged_options(args),
     )
     if args.connectivity_dir:
         sim.setNavGraphPath(str(args.connectivity_dir))

@@ -37,9 +37,11 @@ import mujoco
 import numpy as np
 
 from havln_mj import groups
+from havln_mj.errors import InvalidArgumentError
 from havln_mj.frames import heading_to, wrap_angle
 from havln_mj.humans.mujoco_people import PeopleWriter, add_people
 from havln_mj.nav import NavGrid, build_navgrids
+from havln_mj.robot.go1.constants import CONTROLLERS
 from havln_mj.robot.go1.model import add_go1
 from havln_mj.robot.go1.primitives import Go1Body, OnTick, PrimitiveResult
 from havln_mj.scene.navgraph import LEVEL_GAP
@@ -66,6 +68,8 @@ class LeggedOptions:
         turn_rad: Size of the continuous TURN actions.
         retry_m: A graph move ending farther than this from its viewpoint walks again.
         menagerie_xml: A user's Menagerie ``go1.xml`` to use instead of the built-in model.
+        controller: The gait: ``"trot"`` (blind, flat floors) or ``"terrain"`` (reads a
+            height scan; see :class:`~havln_mj.robot.go1.primitives.Go1Body`).
     """
 
     estimate: str = "truth"
@@ -75,6 +79,13 @@ class LeggedOptions:
     turn_rad: float = math.pi / 4
     retry_m: float = 0.15
     menagerie_xml: str | None = None
+    controller: str = "trot"
+
+    def __post_init__(self) -> None:
+        if self.controller not in CONTROLLERS:
+            raise InvalidArgumentError(
+                f"controller {self.controller!r} unknown; valid: {', '.join(CONTROLLERS)}"
+            )
 
 
 @dataclass
@@ -216,7 +227,10 @@ class LeggedAgent:
     def __init__(self, world: LeggedWorld) -> None:
         self.world = world
         self.data = mujoco.MjData(world.model)
-        self.body = Go1Body(world.model, self.data, PREFIX, world.options.estimate)
+        options = world.options
+        self.body = Go1Body(
+            world.model, self.data, PREFIX, options.estimate, controller=options.controller
+        )
         self.people = PeopleWriter(world.model, len(world.crowd.shapes))
         self.fell = False
         self.diverged = False

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import havln_mj as MatterSim  # noqa: N812 - MatterSim code, only the import changed
-from havln_mj.errors import InvalidActionError
+from havln_mj.errors import InvalidActionError, InvalidArgumentError
 from havln_mj.frames import heading_to, wrap_angle
 from havln_mj.humans.body import BodyShape
 from havln_mj.humans.crowd import Crowd, Person
@@ -64,6 +64,19 @@ def test_graph_action_walks_to_the_viewpoint(graph, edge):
     dist = float(np.linalg.norm(graph.position(b)[:2] - graph.position(a)[:2]))
     assert dist / 0.6 < state.time < dist / 0.2 + 6.0  # physics time, a walking robot's pace
     assert state.step == 1 and not state.fell
+
+
+def test_the_terrain_gait_walks_graph_actions_too(graph, edge):
+    a, b, h = edge
+    sim = _sim(legged=LeggedOptions(controller="terrain"))
+    sim.newEpisode([SCAN], [a], [h], [0.0])
+    ids = [v.viewpointId for v in sim.getState()[0].navigableLocations]
+    sim.makeAction([ids.index(b)], [0.0], [0.0])
+    state = sim.getState()[0]
+    assert state.arrived and state.location.viewpointId == b and not state.fell
+    assert np.hypot(*(state.pose[:2] - graph.position(b)[:2])) < 0.3
+    with pytest.raises(InvalidArgumentError, match="'hop' unknown; valid: trot, terrain"):
+        LeggedOptions(controller="hop")
 
 
 def test_continuous_actions(graph, edge):

@@ -12,6 +12,9 @@ import math
 LEGS = ("FR", "FL", "RR", "RL")
 LEG_PARTS = ("hip", "thigh", "calf")
 
+CONTROLLERS = ("trot", "terrain")
+"""The gaits a :class:`~havln_mj.robot.go1.primitives.Go1Body` can walk with."""
+
 TRUNK = "trunk"
 FREE_JOINT = "root"
 JOINTS = tuple(f"{leg}_{part}_joint" for leg in LEGS for part in LEG_PARTS)

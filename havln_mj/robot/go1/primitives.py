@@ -29,7 +29,6 @@ from havln_mj.robot.go1.results import Go1Pose, PrimitiveResult
 from havln_mj.robot.go1.terrain_gait import TerrainGait
 
 OnTick = Callable[[float], None]
-CONTROLLERS = ("trot", "terrain")
 MAX_DISTANCE = 10.0  # metres, per forward primitive
 MAX_TURN = 2.0 * math.pi  # radians, per turn primitive
 MAX_STAND = 600.0  # seconds
@@ -66,9 +65,9 @@ class Go1Body:
         gains: Go1Gains | None = None,
         controller: str = "trot",
     ) -> None:
-        if controller not in CONTROLLERS:
+        if controller not in const.CONTROLLERS:
             raise InvalidArgumentError(
-                f"controller {controller!r} unknown; valid: {', '.join(CONTROLLERS)}"
+                f"controller {controller!r} unknown; valid: {', '.join(const.CONTROLLERS)}"
             )
         if estimate not in ESTIMATES:
             raise InvalidArgumentError(
