@@ -48,6 +48,7 @@ from havln_mj.scene.navgraph import LEVEL_GAP
 from havln_mj.scene.proxy.routes import route_floor_points
 from havln_mj.scene.scan import Scan, floor_heights
 from havln_mj.sim.crowd import NO_CROWD, Crowd, Proximity
+from havln_mj.sim.divergence import DivergedError, warning_counts
 from havln_mj.sim.proximity import knots_proximity
 from havln_mj.sim.world import WorldOptions, build_world, world_spec
 
@@ -323,12 +324,12 @@ class LeggedAgent:
         start_time = d.time
         times, points, touches = [t0], [self.position()], [0]
         physical = self.world.options.physical_humans
-        warnings0 = _warning_counts(d)
+        warnings0 = warning_counts(d)
         trusted = [self.position(), self.heading()]
 
         def tick(physics_time: float) -> None:
-            if _warning_counts(d) != warnings0:
-                raise _DivergedError
+            if warning_counts(d) != warnings0:
+                raise DivergedError
             trusted[:] = [self.position(), self.heading()]
             t = t0 + physics_time - start_time
             if physical:
@@ -352,10 +353,10 @@ class LeggedAgent:
         done: list[PrimitiveResult] = []
         try:
             done = script(do)
-            if _warning_counts(d) != warnings0:
-                raise _DivergedError
+            if warning_counts(d) != warnings0:
+                raise DivergedError
             tick(d.time)
-        except _DivergedError:
+        except DivergedError:
             # MuJoCo has reset the state: the pose is no longer the robot's, keep the last.
             self.diverged = True
             self._last_good = (trusted[0], trusted[1])
@@ -384,23 +385,3 @@ class LeggedAgent:
                 | (np.isin(g2, human) & np.isin(g1, robot))
             )
         )
-
-
-class _DivergedError(Exception):
-    """Raised inside a primitive's tick when MuJoCo reports diverged physics."""
-
-
-_DIVERGENCE_WARNINGS = [
-    int(w)
-    for w in (
-        mujoco.mjtWarning.mjWARN_BADQPOS,
-        mujoco.mjtWarning.mjWARN_BADQVEL,
-        mujoco.mjtWarning.mjWARN_BADQACC,
-        mujoco.mjtWarning.mjWARN_CONTACTFULL,
-        mujoco.mjtWarning.mjWARN_CNSTRFULL,
-    )
-]
-
-
-def _warning_counts(data: mujoco.MjData) -> tuple[int, ...]:
-    return tuple(int(data.warning[w].number) for w in _DIVERGENCE_WARNINGS)
