@@ -15,11 +15,10 @@ Prints one JSON object. Run: ``python benchmarks/bench_skybox.py [--mattersim-bu
 from __future__ import annotations
 
 import argparse
-import importlib
+import importlib.util
 import json
 import math
 import os
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -76,8 +75,14 @@ def _make_dataset(root: Path, size: int = 512) -> list[tuple[str, np.ndarray]]:
 def _import_mattersim(build: Path):
     """MatterSim's module. Imported before MuJoCo: its OSMesa GL calls must bind first, or
     they reach the EGL library MuJoCo loads and draw nothing."""
-    sys.path.insert(0, str(build))  # a benchmark peer, never a dependency of the package
-    return importlib.import_module("MatterSim")
+    # Loaded from its file (a benchmark peer, never a dependency of the package).
+    found = sorted(build.glob("MatterSim*.so"))
+    if not found:
+        raise FileNotFoundError(f"no MatterSim*.so in {build}")
+    spec = importlib.util.spec_from_file_location("MatterSim", found[0])
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def _mattersim(module, root: Path):
