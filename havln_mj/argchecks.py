@@ -32,6 +32,18 @@ DATA_FLAGS = {
 """The flags naming a user's data, with their help."""
 
 
+def add_go1_controller_flag(p: argparse.ArgumentParser) -> None:
+    """Adds ``--go1-controller``: the gait the simulated GO1 walks with."""
+    from havln_mj.robot.go1.constants import CONTROLLERS  # the GO1 package, only for its CLIs
+
+    p.add_argument(
+        "--go1-controller",
+        choices=CONTROLLERS,
+        default="trot",
+        help="the GO1's gait: trot (blind, flat floors; default) or terrain (height scan)",
+    )
+
+
 def add_data_flags(p: argparse.ArgumentParser, *flags: str) -> None:
     """Adds ``flags`` (names in :data:`DATA_FLAGS`) to ``p``, as paths defaulting to None."""
     for flag in flags:

@@ -32,7 +32,6 @@ from havln_mj import __version__, argchecks
 from havln_mj.errors import HavlnError, InvalidArgumentError
 from havln_mj.frames import heading_to
 from havln_mj.recording import OUTPUTS, Recording, staged_outputs
-from havln_mj.robot.go1.constants import CONTROLLERS
 from havln_mj.scene.ids import parse_scene_id
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.procedural.recipe import load_recipe
@@ -226,12 +225,7 @@ def _add_robot_flags(p: argparse.ArgumentParser) -> None:
         default="truth",
         help="what the GO1's primitives are closed on (default: ground truth)",
     )
-    p.add_argument(
-        "--go1-controller",
-        choices=CONTROLLERS,
-        default="trot",
-        help="the GO1's gait: trot (blind, flat floors; default) or terrain (height scan)",
-    )
+    argchecks.add_go1_controller_flag(p)
     p.add_argument(
         "--go1-camera-height",
         type=float,

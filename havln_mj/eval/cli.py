@@ -11,9 +11,9 @@ from collections.abc import Sequence
 from dataclasses import asdict
 from pathlib import Path
 
+from havln_mj import argchecks
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.eval.setup import AGENTS, protocol_of
-from havln_mj.robot.go1.constants import CONTROLLERS
 from havln_mj.scene.ids import expand_scene_ranges
 from havln_mj.tasks.datasets import load_dataset
 from havln_mj.tasks.episodes import Episode
@@ -78,12 +78,7 @@ def _add_agent_flags(p: argparse.ArgumentParser) -> None:
         default="point",
         help="the agent's body: the point camera rig (default) or the simulated GO1",
     )
-    p.add_argument(
-        "--go1-controller",
-        choices=CONTROLLERS,
-        default="trot",
-        help="the GO1's gait: trot (blind, flat floors; default) or terrain (height scan)",
-    )
+    argchecks.add_go1_controller_flag(p)
     p.add_argument(
         "--protocol",
         choices=PROTOCOL_NAMES,
