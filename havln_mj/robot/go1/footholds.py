@@ -14,20 +14,13 @@ from havln_mj.robot.go1 import constants as const
 from havln_mj.robot.go1.actuation import clip_joints
 from havln_mj.robot.go1.frames import rotation, to_body
 from havln_mj.robot.go1.gains import TerrainGains
+from havln_mj.robot.go1.gait import smoothstep
 from havln_mj.robot.go1.kinematics import leg_ik
 
 Ground = Callable[[float, float], float]
 SAMPLE = 0.02  # metres between ground samples along a line
 PROFILE = 20  # a swing's height profile has PROFILE + 1 samples
 NEAR = tuple(-0.3 + 0.04 * k for k in range(24))  # ground that makes the trunk's rough (m)
-
-
-def _smooth(s: float) -> float:
-    if s <= 0.0:
-        return 0.0
-    if s >= 1.0:
-        return 1.0
-    return s * s * (3.0 - 2.0 * s)
 
 
 def is_rough(ground: Ground, x: float, y: float, c: float, s: float, ahead, jump: float) -> bool:
@@ -110,9 +103,9 @@ def swing_heights(
     for i in range(PROFILE + 1):
         si = i / PROFILE
         if si <= m0:
-            zs.append(z0 + g.min_lift * _smooth(si / m0))
+            zs.append(z0 + g.min_lift * smoothstep(si / m0))
         elif si >= m1:
-            zs.append(gz + g.min_lift * (1.0 - _smooth((si - m1) / (1.0 - m1))))
+            zs.append(gz + g.min_lift * (1.0 - smoothstep((si - m1) / (1.0 - m1))))
         else:
             k = round(length * swing_along(si, g) / step) + a
             near = [t for t in tops[max(0, k - a) : k + a + 1] if t < math.inf]
@@ -128,7 +121,7 @@ def swing_heights(
 
 def swing_along(s: float, g: TerrainGains) -> float:
     """Fraction of the way from lift-off to foothold a swing foot is at phase ``s``."""
-    return _smooth((s - g.swing_start) / (g.swing_end - g.swing_start))
+    return smoothstep((s - g.swing_start) / (g.swing_end - g.swing_start))
 
 
 def swing_height(zs: list[float], s: float) -> float:

@@ -17,7 +17,8 @@ PHASE_OFFSET = (0.0, 0.5, 0.5, 0.0)  # FR, FL, RR, RL: diagonal pairs half a cyc
 HOME_CTRL = HOME_LEG * len(LEGS)
 
 
-def _smooth(s: float) -> float:
+def smoothstep(s: float) -> float:
+    """0 below 0, 1 above 1, and the cubic ``3s² − 2s³`` between: a swing's lift profile."""
     if s <= 0.0:
         return 0.0
     if s >= 1.0:
@@ -122,15 +123,15 @@ class TrotGait:
                 s = (psi - g.duty) / (1.0 - g.duty)
                 tx = 0.5 * fx * t_stance + g.raibert_gain * ex
                 ty = 0.5 * fy * t_stance + g.raibert_gain * ey
-                h = _smooth((s - 0.1) / 0.75)
+                h = smoothstep((s - 0.1) / 0.75)
                 lx, ly = self.lift[i]
                 o[0] = lx + (tx - lx) * h
                 o[1] = ly + (ty - ly) * h
                 if s < 0.4:
-                    lift[i] = g.swing_height * _smooth(s / 0.4)
+                    lift[i] = g.swing_height * smoothstep(s / 0.4)
                 else:
                     drop = g.swing_height + g.touchdown_depth
-                    lift[i] = g.swing_height - drop * _smooth((s - 0.4) / 0.6)
+                    lift[i] = g.swing_height - drop * smoothstep((s - 0.4) / 0.6)
         return self._ik_all(depth, lift)
 
     def _ik_all(self, depth: float, lift: list[float]) -> list[float]:
