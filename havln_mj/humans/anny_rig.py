@@ -129,11 +129,6 @@ class AnnyRig:
         blend = np.einsum("vk,vkab->vab", weight, m[index])
         return np.einsum("vab,vb->va", blend[:, :, :3], rest) + blend[:, :, 3]
 
-    def local_vertices(self, joint: int, vertex_ids: np.ndarray) -> np.ndarray:
-        """Rest vertices in joint ``joint``'s frame (as a rigid piece on its mocap body)."""
-        v = self.body.vertices[vertex_ids] - self.anchors[joint]
-        return rot.rotate(self.correction[joint], v)
-
 
 def fit(body: AnnyBody) -> AnnyRig:
     """Fits ``body`` to our skeleton (its rest corrections)."""

@@ -2,7 +2,8 @@
 
 In the MuJoCo world it is a mocap body ``agent`` at the camera position, oriented like the
 camera, carrying the camera ``agent_cam``. Moving it costs simulated time: distance / speed
-plus turned angle / turn rate (defaults below), which the clock contract uses.
+plus turned angle / turn rate (defaults below; the simulator's clock,
+:class:`~havln_mj.sim.point.PointKind`, charges it).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import mujoco
 import numpy as np
 
 from havln_mj.errors import InvalidArgumentError
-from havln_mj.frames import camera_quat, wrap_angle, wrap_heading
+from havln_mj.frames import camera_quat, wrap_heading
 
 BODY = "agent"
 CAMERA = "agent_cam"
@@ -31,30 +32,22 @@ def add_point_body(spec: mujoco.MjSpec, vfov_deg: float = 60.0) -> None:
 
 @dataclass
 class PointBody:
-    """Pose of the kinematic agent and its motion costs.
+    """Pose of the kinematic agent.
 
     Attributes:
         position: Camera position (x, y, z), metres.
         heading: Radians in [0, 2π), 0 facing +y, turning right positive.
         elevation: Radians, up positive.
-        speed: Walking speed for the clock (m/s).
-        turn_rate: Turning rate for the clock (rad/s).
     """
 
     position: np.ndarray
     heading: float = 0.0
     elevation: float = 0.0
-    speed: float = DEFAULT_SPEED
-    turn_rate: float = DEFAULT_TURN_RATE
 
     def __post_init__(self) -> None:
         self.position = np.asarray(self.position, dtype=float).reshape(3)
         if not np.all(np.isfinite(self.position)):
             raise InvalidArgumentError(f"position must be finite, got {self.position.tolist()}")
-        for name in ("speed", "turn_rate"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise InvalidArgumentError(f"{name} must be a positive number, got {value!r}")
         self.set_pose(self.position, self.heading, self.elevation)
 
     def set_pose(self, position: np.ndarray, heading: float, elevation: float = 0.0) -> None:
@@ -68,14 +61,6 @@ class PointBody:
         self.position = p
         self.heading = wrap_heading(heading)
         self.elevation = float(elevation)
-
-    def move_duration(self, target: np.ndarray) -> float:
-        """Seconds to walk in a straight line to ``target``."""
-        return float(np.linalg.norm(np.asarray(target, dtype=float) - self.position)) / self.speed
-
-    def turn_duration(self, d_heading: float, d_elevation: float = 0.0) -> float:
-        """Seconds to turn by the given angles (the larger of the two sets the time)."""
-        return max(abs(wrap_angle(d_heading)), abs(d_elevation)) / self.turn_rate
 
     def write(self, model: mujoco.MjModel, data: mujoco.MjData) -> None:
         """Writes the pose into the model's mocap body and updates kinematics."""

@@ -125,17 +125,6 @@ def _overlaps(a: np.ndarray, b: np.ndarray, gap: float = 0.0) -> bool:
     return bool(np.all(a[:2] < b[2:] + gap) and np.all(b[:2] < a[2:] + gap))
 
 
-def _pinches(foot: np.ndarray, inner: np.ndarray, taken: list[np.ndarray], passage: float) -> bool:
-    """Whether ``foot`` leaves a gap to a wall or an item that is neither flush nor passable."""
-    gaps = [foot[0] - inner[0], foot[1] - inner[1], inner[2] - foot[2], inner[3] - foot[3]]
-    for o in taken:
-        for ax in (0, 1):
-            other = 1 - ax
-            if foot[other] < o[other + 2] and o[other] < foot[other + 2]:  # facing each other
-                gaps.append(max(o[ax] - foot[ax + 2], foot[ax] - o[ax + 2]))
-    return any(0.03 < g < passage for g in gaps)
-
-
 def inner_rect(room: Room, plan_size: tuple[float, float], recipe: Recipe) -> np.ndarray:
     """The room's floor inside its walls, as (x0, y0, x1, y1)."""
     w_in, w_out = recipe["interior_wall_half"], recipe["exterior_wall"]
