@@ -22,7 +22,7 @@ import numpy as np
 from havln_mj.cache import pid_alive
 from havln_mj.errors import OutputError
 from havln_mj.frames import heading_to, wrap_angle
-from havln_mj.render.video import VideoWriter
+from havln_mj.render.video import SizedOnFirstFrame
 from havln_mj.sim.crowd import COLLISION_DISTANCE
 
 OUTPUTS = {
@@ -90,23 +90,6 @@ def staged_outputs(out: Path) -> Iterator[_Stage]:
         shutil.rmtree(stage.path, ignore_errors=True)
 
 
-class _Video:
-    """An H.264 MP4 file written frame by frame (opened at the first frame, whose size it takes)."""
-
-    def __init__(self, path: Path, fps: float) -> None:
-        self.path, self.fps = path, fps
-        self._writer: VideoWriter | None = None
-
-    def write(self, rgb: np.ndarray) -> None:
-        if self._writer is None:
-            self._writer = VideoWriter(self.path, self.fps, (rgb.shape[1], rgb.shape[0]))
-        self._writer.write(rgb)
-
-    def close(self) -> None:
-        if self._writer is not None:
-            self._writer.close()
-
-
 class Recording:
     """Films one simulator's walks and reports them.
 
@@ -123,7 +106,7 @@ class Recording:
         self, sim, crowd, video: Path, fps: float, label: str, chase: bool = False
     ) -> None:
         self.sim, self.crowd, self.label = sim, crowd, label
-        self.video = _Video(video, fps)
+        self.video = SizedOnFirstFrame(video, fps)
         self.frames, self.render_s = 0, 0.0
         self.tracks: list[list[tuple[float, ...]]] = []
         self.collisions: list[np.ndarray] = []  # where the body was within 1 m of someone

@@ -21,7 +21,7 @@ import numpy as np
 
 from havln_mj.cache import atomic_write_json
 from havln_mj.eval.setup import EXPERTS, evaluation_simulator, make_agent, protocol_of
-from havln_mj.render.video import VideoWriter
+from havln_mj.render.video import SizedOnFirstFrame
 from havln_mj.sim.simulator import Simulator
 from havln_mj.tasks.episodes import Episode
 from havln_mj.tasks.experts import run_expert
@@ -115,14 +115,12 @@ def _write(folder, record, episode, trajectory, film, sim, draw_topdown) -> dict
     ends = [r.time for r in trajectory.records]  # each state's time, the start first
     hit = [bool(r.is_crushed) for r in trajectory.records]
     video = folder / f"{instr_id}.mp4"
-    writer = None
+    writer = SizedOnFirstFrame(video, FPS)
     collisions, track = [], []
     try:
         for t, rgb, pose, _ in film.frames:
             # The state (action) a frame belongs to: the first whose time is not before it.
             s = min(int(np.searchsorted(ends, t - 1e-9)), len(ends) - 1)
-            if writer is None:
-                writer = VideoWriter(video, FPS, (rgb.shape[1], rgb.shape[0]))
             what = "start" if s == 0 else f"step {s}"
             text = f"{instr_id}  {what}  t={t:5.1f}s" + ("  COLLISION" if hit[s] else "")
             writer.write(_label(rgb, text, hit[s]))
@@ -130,8 +128,7 @@ def _write(folder, record, episode, trajectory, film, sim, draw_topdown) -> dict
             if hit[s] and abs(t - ends[s]) < 1e-6:
                 collisions.append(pose[:3])
     finally:
-        if writer is not None:
-            writer.close()
+        writer.close()
     scan = sim.scan(episode.scan)
     walked = np.array(track).reshape(-1, 3)
     points = np.vstack([walked, [scan.graph.position(v) for v in episode.path]])

@@ -183,6 +183,28 @@ class VideoWriter:
         return f"VideoWriter({str(self.path)!r}, {self.fps:g} fps, {size}, {state})"
 
 
+class SizedOnFirstFrame:
+    """A :class:`VideoWriter` opened at the first frame written, whose size it takes.
+
+    Nothing is written when no frame comes; :meth:`close` then does nothing.
+    """
+
+    def __init__(self, path: Path | str, fps: float) -> None:
+        self.path, self.fps = Path(path), fps
+        self._writer: VideoWriter | None = None
+
+    def write(self, rgb: np.ndarray) -> None:
+        """Appends one ``H×W×3`` RGB frame."""
+        if self._writer is None:
+            self._writer = VideoWriter(self.path, self.fps, (rgb.shape[1], rgb.shape[0]))
+        self._writer.write(rgb)
+
+    def close(self) -> None:
+        """Finishes the file, if any frame was written."""
+        if self._writer is not None:
+            self._writer.close()
+
+
 def probe(path: Path | str) -> dict:
     """What the bundled ffmpeg reads from a video: codec, pixel format, size, fps, frames.
 
