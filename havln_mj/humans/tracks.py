@@ -82,6 +82,8 @@ class PelvisTable:
             values, last, loop, period, start_f + fps * UNROLLED_S
         )
         self._person = (fps, start_f, period, loop, last, base, start_f + unrolled_base)
+        # Each person's (fps, where simulated time 0 is on the unrolled axis), as floats.
+        self.unrolled_frames = list(zip(fps.tolist(), (start_f + unrolled_base).tolist()))
         self._everyone = _Columns(*self._person)
         self._subsets: dict[tuple[int, ...], _Columns] = {}
 
