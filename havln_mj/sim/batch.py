@@ -229,6 +229,10 @@ class Batch:
                 self._settle(el, outcome, heading, elevation, index, NO_PROXIMITY)
             elif self.rule.check != "action":
                 self._settle(el, outcome, heading, elevation, index, None)
+            elif len(actions) == 1:  # one element moved (hot): its signal, then its state
+                rule = self.rule
+                contact = knots_proximity(el.crowd, outcome[1], rule.threshold, self._near)
+                self._settle(el, outcome, heading, elevation, index, contact)
             elif deferred is None:
                 deferred = [(el, outcome, heading, elevation, index)]
             else:
