@@ -18,7 +18,8 @@ _UINT16_MAX = 65535
 
 def depth_to_mattersim(depth_m: np.ndarray) -> np.ndarray:
     """Metres to MatterSim's H×W×1 ``uint16`` in 0.25 mm units (out of range reads 0)."""
-    units = np.rint(depth_m * DEPTH_UNITS_PER_M)
+    units = np.multiply(depth_m, DEPTH_UNITS_PER_M)
+    np.rint(units, out=units)
     units *= units <= _UINT16_MAX  # out of range reads 0 (a product: masked writes are slow)
     return units.astype(np.uint16)[..., None]
 
