@@ -101,7 +101,7 @@ class Batch:
     ) -> None:
         self.cfg, self.kind, self.format = cfg, kind, image_format
         self.rule = rule
-        self.clock = HumanClock.continuous()  # (sets _continuous)
+        self.clock = HumanClock.continuous()
         self.frame = 0
         self.timers = timers
         self.elements: list[Element] = []
@@ -230,8 +230,8 @@ class Batch:
             elif self.rule.check != "action":
                 self._settle(el, outcome, heading, elevation, index, None)
             elif len(actions) == 1:  # one element moved (hot): its signal, then its state
-                rule = self.rule
-                contact = knots_proximity(el.crowd, outcome[1], rule.threshold, self._near)
+                threshold = self.rule.threshold
+                contact = knots_proximity(el.crowd, outcome[1], threshold, self._near)
                 self._settle(el, outcome, heading, elevation, index, contact)
             elif deferred is None:
                 deferred = [(el, outcome, heading, elevation, index)]
