@@ -376,7 +376,8 @@ class Batch:
         if not cfg.rendering:
             return (*self.format.blank(cfg.width, cfg.height), None, None, None)
         t0 = time.perf_counter()
-        view = el.body.render(self.cfg.view_settings(), el.elevation, el.people_t)
+        settings = self.format.settings(cfg.view_settings())
+        view = el.body.render(settings, el.elevation, el.people_t)
         images = self.format.images(view)
         self.timers["render"] += time.perf_counter() - t0
         self.timers["frames"] += 1
