@@ -23,7 +23,7 @@ import numpy as np
 from havln_mj.frames import TWO_PI
 from havln_mj.sim.body import Body, BodyKind, Film, Outcome
 from havln_mj.sim.crowd import NO_PROXIMITY, Crowd, Proximity, ha3d_points, state_proximity
-from havln_mj.sim.frame import View
+from havln_mj.sim.frame import View, ViewSettings
 from havln_mj.sim.images import ImageFormat
 from havln_mj.sim.navigation import NavTable
 from havln_mj.sim.proximity import NearMemo, batch_proximity, knots_proximity, sample_knots
@@ -109,6 +109,7 @@ class Batch:
         self.reactions = None  # how people react to the agent (None: they do not)
         self._near = NearMemo()
         self._cos_fov: float | None = None
+        self._view: ViewSettings | None = None  # the state images' view settings
         self._blank: tuple[np.ndarray, np.ndarray] | None = None
         self._revision = -1  # the settings' revision _cos_fov and _blank were derived from
 
@@ -254,7 +255,7 @@ class Batch:
         self._settle_all(moved)
 
     def _prepare_step(self) -> None:
-        """What every element's state needs this step: the navigation rule, blank images.
+        """What every element's state needs this step: navigation rule, view, blank images.
 
         Derived once per change of the settings (the camera may change between steps).
         """
@@ -262,6 +263,7 @@ class Batch:
         if cfg.revision != self._revision:
             self._revision = cfg.revision
             self._cos_fov = cfg.cos_half_hfov()
+            self._view = self.format.settings(cfg.view_settings())
             self._blank = None if cfg.rendering else self.format.blank(cfg.width, cfg.height)
 
     def _settle_all(self, moved: list[tuple], starting: bool = False) -> None:
@@ -376,8 +378,8 @@ class Batch:
         if not cfg.rendering:
             return (*self.format.blank(cfg.width, cfg.height), None, None, None)
         t0 = time.perf_counter()
-        settings = self.format.settings(cfg.view_settings())
-        view = el.body.render(settings, el.elevation, el.people_t)
+        self._prepare_step()  # (the settings may have changed since the step began)
+        view = el.body.render(self._view, el.elevation, el.people_t)
         images = self.format.images(view)
         self.timers["render"] += time.perf_counter() - t0
         self.timers["frames"] += 1
