@@ -87,7 +87,6 @@ class Batch:
 
     Attributes:
         rule: The collision rule (read at every state).
-        clock: The people's clock.
         frame: HA3D's shared frame counter (with ``clock.kind == "ha3d"``).
     """
 
