@@ -170,7 +170,7 @@ def main() -> None:
     parser.add_argument("--walks", type=int, default=100, help="walks per course")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--parts", default="courses,proxy")
-    parser.add_argument("--controller", default="terrain", choices=("terrain", "trot"))
+    parser.add_argument("--controller", default="terrain", choices=("terrain", "trot", "learned"))
     parser.add_argument("--proxy-edges", type=int, default=0, help="0: every stair edge")
     parser.add_argument("--gains", type=Path, default=None, help="gains.json to use")
     parser.add_argument(
