@@ -18,7 +18,9 @@ from havln_mj.train_go1.trainer import CHECKPOINT, Trainer, export_checkpoint
 
 def main(argv: list[str] | None = None) -> int:
     """The command line."""
-    p = argparse.ArgumentParser(prog="python -m havln_mj.train_go1", description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(
+        prog="python -m havln_mj.train_go1", description=__doc__.splitlines()[0]
+    )
     p.add_argument("--config", default=None, help="training config JSON (default: built-in)")
     p.add_argument("--out", required=True, help="run folder")
     p.add_argument("--resume", action="store_true", help="continue the run in --out")

@@ -145,7 +145,12 @@ class TrainConfig:
         return asdict(self)
 
 
-_SECTIONS = {"env": EnvConfig, "reward": RewardConfig, "curriculum": CurriculumConfig, "ppo": PPOConfig}
+_SECTIONS = {
+    "env": EnvConfig,
+    "reward": RewardConfig,
+    "curriculum": CurriculumConfig,
+    "ppo": PPOConfig,
+}
 
 
 def config_from_json(raw: dict, where: str = "config") -> TrainConfig:
@@ -163,7 +168,9 @@ def config_from_json(raw: dict, where: str = "config") -> TrainConfig:
             if not isinstance(section, dict):
                 raise MalformedDataError(f"{where}: {name!r} must be a JSON object")
             values = _known(section, cls, f"{where}: {name}")
-            top[name] = cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in values.items()})
+            top[name] = cls(
+                **{k: tuple(v) if isinstance(v, list) else v for k, v in values.items()}
+            )
         return TrainConfig(**top)
     except TypeError as err:
         raise MalformedDataError(f"{where}: {err}") from err

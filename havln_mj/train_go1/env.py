@@ -61,7 +61,9 @@ class Go1Envs:
         self.gains = load_gains()
         self.dt = spec.decimation * const.TIMESTEP
         self.courses = build_courses(e)
-        self.kinds = [KINDS[1] if rng.random() < e.ramp_share else KINDS[0] for _ in range(e.num_envs)]
+        self.kinds = [
+            KINDS[1] if rng.random() < e.ramp_share else KINDS[0] for _ in range(e.num_envs)
+        ]
         start = rng.integers(0, e.max_init_level + 1, e.num_envs)
         self.curriculum = Curriculum(cfg.curriculum, e.levels, start, rng)
         self.robots: list[_Robot | None] = [None] * e.num_envs
@@ -165,7 +167,9 @@ class Go1Envs:
         m, d = body.model, body.data
         steps = self.gains.terrain.control_decimation
         last = gait.action
-        gait.action = np.clip(np.asarray(action, dtype=np.float64), -self.spec.clip_actions, self.spec.clip_actions)
+        gait.action = np.clip(
+            np.asarray(action, dtype=np.float64), -self.spec.clip_actions, self.spec.clip_actions
+        )
         ref = r.ref
         for k in range(gait.ticks):
             if k:

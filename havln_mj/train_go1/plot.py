@@ -8,8 +8,11 @@ from pathlib import Path
 
 
 def plot_curriculum(log: str | Path, out: str | Path) -> None:
-    """Draws ``log.jsonl``'s mean level and success (share of walks that got far enough
-    without a fall, per iteration and its 20-iteration mean) to a PNG, atomically."""
+    """Draws a run's mean terrain level and walk success per iteration to a PNG, atomically.
+
+    Success is the share of the walks ended in an iteration that got far enough without a fall
+    (dots), with its 20-iteration mean (line).
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -28,8 +31,12 @@ def plot_curriculum(log: str | Path, out: str | Path) -> None:
         x, y = np.array(pts).T
         ax2.plot(x, y, ".", color="tab:orange", alpha=0.3, markersize=3)
         k = min(20, len(y))
-        ax2.plot(x[k - 1 :], np.convolve(y, np.ones(k) / k, mode="valid"), color="tab:orange",
-                 label=f"success ({k}-iteration mean)")
+        ax2.plot(
+            x[k - 1 :],
+            np.convolve(y, np.ones(k) / k, mode="valid"),
+            color="tab:orange",
+            label=f"success ({k}-iteration mean)",
+        )
     ax2.set_ylim(0, 1)
     ax2.set_ylabel("walk success", color="tab:orange")
     steps = rows[-1]["env_steps"] if rows else 0

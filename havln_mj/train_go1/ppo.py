@@ -51,6 +51,7 @@ class Normalizer(nn.Module):
         return torch.sqrt(self.var).clamp_min(1e-2)
 
     def forward(self, x: torch.Tensor, clip: float) -> torch.Tensor:
+        """Normalised ``x``, clipped to ``±clip``."""
         return ((x - self.mean.float()) / self.std.float()).clamp(-clip, clip)
 
 
@@ -117,7 +118,16 @@ class PPO:
         n = st.rewards.numel()
         flat = {
             k: getattr(st, k).reshape(n, *getattr(st, k).shape[2:])
-            for k in ("obs", "actions", "log_probs", "values", "returns", "advantages", "mu", "sigma")
+            for k in (
+                "obs",
+                "actions",
+                "log_probs",
+                "values",
+                "returns",
+                "advantages",
+                "mu",
+                "sigma",
+            )
         }
         size = max(n // c.minibatches, 1)
         stats = {"policy_loss": 0.0, "value_loss": 0.0, "entropy": 0.0, "kl": 0.0}
@@ -139,10 +149,14 @@ class PPO:
         with torch.no_grad():  # KL(old || new) of diagonal Gaussians, for the adaptive rate
             sigma, mu = dist.stddev, dist.mean
             kl = (
-                torch.log(sigma / b["sigma"])
-                + (b["sigma"] ** 2 + (b["mu"] - mu) ** 2) / (2.0 * sigma**2)
-                - 0.5
-            ).sum(-1).mean()
+                (
+                    torch.log(sigma / b["sigma"])
+                    + (b["sigma"] ** 2 + (b["mu"] - mu) ** 2) / (2.0 * sigma**2)
+                    - 0.5
+                )
+                .sum(-1)
+                .mean()
+            )
             if kl > 2.0 * c.desired_kl:
                 self.lr = max(1e-5, self.lr / 1.5)
             elif 0.0 < kl < 0.5 * c.desired_kl:

@@ -61,7 +61,9 @@ def ramp_degrees(cfg: EnvConfig, level: int) -> float:
     return cfg.max_ramp_deg * level / (cfg.levels - 1)
 
 
-def course_spec(cfg: EnvConfig, kind: str, level: int, tread: float) -> tuple[mujoco.MjSpec, float, float]:
+def course_spec(
+    cfg: EnvConfig, kind: str, level: int, tread: float
+) -> tuple[mujoco.MjSpec, float, float]:
     """The spec of a course, its flight's run and its landing's height."""
     spec = flat_floor_spec()
     n = cfg.flight_risers

@@ -2,9 +2,10 @@
 
 A run folder holds ``config.json``, ``log.jsonl`` (one line per iteration), ``checkpoint.pt``
 (the latest, every ``checkpoint_every`` iterations and at the end), ``policy.npz`` (the
-actor exported for :mod:`havln_mj.robot.go1.learned`, written with each checkpoint) and
-``curriculum.png``; ``policies/`` keeps each checkpoint's policy by iteration. Everything random draws from one ``numpy.random.Generator`` and one
-``torch.Generator``, both seeded from the config and saved in the checkpoint.
+actor exported for :mod:`havln_mj.robot.go1.learned`, written with each checkpoint),
+``policies/`` (each checkpoint's policy by iteration) and ``curriculum.png``. Everything
+random draws from one ``numpy.random.Generator`` and one ``torch.Generator``, both seeded
+from the config and saved in the checkpoint.
 """
 
 from __future__ import annotations
@@ -43,7 +44,9 @@ class Trainer:
         device: ``"cpu"`` or ``"cuda"`` (networks and the update; the physics is on the CPU).
     """
 
-    def __init__(self, cfg: TrainConfig, out: str | Path, resume: bool = False, device: str = "cpu") -> None:
+    def __init__(
+        self, cfg: TrainConfig, out: str | Path, resume: bool = False, device: str = "cpu"
+    ) -> None:
         self.out = Path(out)
         self.device = device
         ckpt = None
@@ -55,7 +58,7 @@ class Trainer:
             cfg = config_from_json(ckpt["config"], str(path))
         elif (self.out / CHECKPOINT).exists():
             raise InvalidArgumentError(
-                f"{self.out} already holds a run; pass --resume to continue it or pick another --out"
+                f"{self.out} already holds a run; pass --resume to continue it, or another --out"
             )
         self.cfg = cfg
         self.out.mkdir(parents=True, exist_ok=True)
@@ -69,7 +72,9 @@ class Trainer:
             self.rng.bit_generator.state = ckpt["numpy_rng"]
             self.gen.set_state(ckpt["torch_rng"])
         self.envs = Go1Envs(cfg, self.rng, self.spec)
-        self.ac = ActorCritic(self.spec.obs_size, self.spec.action_size, cfg.ppo, self.spec.clip_obs).to(device)
+        self.ac = ActorCritic(
+            self.spec.obs_size, self.spec.action_size, cfg.ppo, self.spec.clip_obs
+        ).to(device)
         self.ppo = PPO(self.ac, cfg.ppo, self.gen)
         if ckpt is not None:
             self.ac.load_state_dict(ckpt["model"])

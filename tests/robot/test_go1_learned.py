@@ -53,8 +53,7 @@ def test_bad_policy_files_raise_specific_errors(tmp_path: Path) -> None:
     junk.write_bytes(b"not a zip file")
     with pytest.raises(MalformedDataError, match="not a GO1 policy"):
         load_policy(junk)
-    policy = load_policy()
-    raw = dict(np.load(Path(policy_path()), allow_pickle=False))
+    raw = dict(np.load(policy_path(), allow_pickle=False))
     for change, match in (
         ({"format_version": np.array(FORMAT_VERSION + 1)}, "format version"),
         ({"obs_mean": np.zeros(3)}, "normalisation"),

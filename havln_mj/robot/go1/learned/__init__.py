@@ -9,4 +9,11 @@ from havln_mj.robot.go1.learned.controller import LearnedGait
 from havln_mj.robot.go1.learned.observation import Observer, PolicySpec
 from havln_mj.robot.go1.learned.policy import FORMAT_VERSION, LearnedPolicy, load_policy
 
-__all__ = ["FORMAT_VERSION", "LearnedGait", "LearnedPolicy", "Observer", "PolicySpec", "load_policy"]
+__all__ = [
+    "FORMAT_VERSION",
+    "LearnedGait",
+    "LearnedPolicy",
+    "Observer",
+    "PolicySpec",
+    "load_policy",
+]

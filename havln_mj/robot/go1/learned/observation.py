@@ -90,7 +90,9 @@ class PolicySpec:
         known = set(cls.__dataclass_fields__)
         unknown = sorted(set(raw) - known)
         if unknown:
-            raise MalformedDataError(f"unknown policy spec fields {unknown}; valid: {sorted(known)}")
+            raise MalformedDataError(
+                f"unknown policy spec fields {unknown}; valid: {sorted(known)}"
+            )
         values = {k: tuple(v) if isinstance(v, list) else v for k, v in raw.items()}
         try:
             spec = cls(**values)

@@ -98,7 +98,9 @@ def load_policy(path: str | Path | None = None) -> LearnedPolicy:
             raw = {k: z[k] for k in z.files}
     except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
         raise MalformedDataError(f"{path} is not a GO1 policy .npz file: {err}") from err
-    missing = [k for k in ("format_version", "spec", "obs_mean", "obs_std", "w0", "b0") if k not in raw]
+    missing = [
+        k for k in ("format_version", "spec", "obs_mean", "obs_std", "w0", "b0") if k not in raw
+    ]
     if missing:
         raise MalformedDataError(f"{path}: policy file lacks {missing}; has {sorted(raw)}")
     version = int(raw["format_version"])
