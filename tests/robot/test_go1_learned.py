@@ -122,7 +122,6 @@ def _stair_walk(down: bool) -> tuple[bool, float]:
     return arrived, p.x
 
 
-@pytest.mark.slow
 @pytest.mark.xfail(
     strict=True,
     reason="measured: the shipped policy (like the terrain gait under it) falls on the first "
