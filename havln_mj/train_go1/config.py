@@ -32,7 +32,7 @@ class EnvConfig:
         max_init_level: Robots start at a random level up to this one.
     """
 
-    num_envs: int = 32
+    num_envs: int = 48
     episode_seconds: float = 8.0
     levels: int = 10
     risers: tuple[float, float] = (0.02, 0.19)
@@ -80,7 +80,7 @@ class CurriculumConfig:
 class PPOConfig:
     """Proximal policy optimisation (clipped surrogate, GAE, adaptive learning rate)."""
 
-    steps_per_env: int = 32
+    steps_per_env: int = 48
     epochs: int = 5
     minibatches: int = 4
     gamma: float = 0.99

@@ -68,6 +68,8 @@ class Go1Envs:
         self.curriculum = Curriculum(cfg.curriculum, e.levels, start, rng)
         self.robots: list[_Robot | None] = [None] * e.num_envs
         self.finished: list[dict] = []  # episodes ended since the last drain
+        self.term_sums: dict[str, float] = {}  # weighted reward terms summed since the drain
+        self.term_steps = 0
         self._obs = np.zeros((e.num_envs, spec.obs_size))
         for i in range(e.num_envs):
             self._start(i)
@@ -180,7 +182,10 @@ class Go1Envs:
         r.paced += gait._v[0] * self.dt  # the gait's pace after its speed cap
         fell = body.is_fallen()
         raw = self._measure(r, last)
-        total, _terms = reward(self.cfg.reward, raw, self.dt, fell)
+        total, terms = reward(self.cfg.reward, raw, self.dt, fell)
+        for name, v in terms.items():
+            self.term_sums[name] = self.term_sums.get(name, 0.0) + v
+        self.term_steps += 1
         y = d.xpos[body.trunk_id, 1]
         timeout = r.t >= self.cfg.env.episode_seconds - 1e-9 or abs(y) > 0.5 * WIDTH - 0.3
         if fell or timeout:
@@ -245,22 +250,35 @@ class Go1Envs:
             }
         )
 
-    def drain(self) -> list[dict]:
-        """The episodes ended since the last call."""
+    def drain(self) -> tuple[list[dict], dict[str, float]]:
+        """The episodes ended since the last call, and each reward term's mean per step."""
         out, self.finished = self.finished, []
-        return out
+        terms = {k: v / max(self.term_steps, 1) for k, v in self.term_sums.items()}
+        self.term_sums, self.term_steps = {}, 0
+        return out, terms
 
 
 def _collisions(m: mujoco.MjModel, d: mujoco.MjData, body: Go1Body) -> int:
-    """Contacts between the robot's non-foot geoms and anything not the robot."""
+    """Contacts of the robot's trunk, hips, thighs and upper shins with anything else.
+
+    The feet are meant to touch, and so is the shin's lower half just above them (its
+    capsule meets the foot sphere and brushes the ground in a normal stance).
+    """
     if not d.ncon:
         return 0
     root = m.body_rootid[body.trunk_id]
-    feet = set(body.foot_ids)
     n = 0
     for g1, g2 in d.contact.geom[: d.ncon].tolist():
         r1 = m.body_rootid[m.geom_bodyid[g1]] == root
         r2 = m.body_rootid[m.geom_bodyid[g2]] == root
-        if r1 != r2 and (g1 if r1 else g2) not in feet:
+        if r1 != r2 and _counts(m, body, g1 if r1 else g2):
             n += 1
     return n
+
+
+def _counts(m: mujoco.MjModel, body: Go1Body, geom: int) -> bool:
+    if geom in body.foot_ids:
+        return False
+    b = m.geom_bodyid[geom]
+    calves = {m.geom_bodyid[g] for g in body.foot_ids}
+    return not (b in calves and m.geom_pos[geom, 2] < -0.1)

@@ -12,7 +12,7 @@ action_rate        ``Σ (a - a_prev)²``: smooth residuals
 action_size        ``Σ a²``: stay near the gait where it needs no help
 clearance          ``Σ_swing feet max(0, h_c - h) · |v_xy|``: a swinging foot moving forward
                    lower than ``clearance_height`` over the ground under it (stubbed toes)
-collision          number of contacts of the trunk, hips, thighs or calves with the terrain
+collision          number of contacts of the trunk, hips, thighs or upper shins with the terrain
 fall               once, when the episode ends in a fall (not a rate)
 =================  =====================================================================
 

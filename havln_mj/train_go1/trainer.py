@@ -130,7 +130,7 @@ class Trainer:
         return obs, total / c.steps_per_env
 
     def _log(self, reward: float, losses: dict, t_collect: float, t_learn: float) -> None:
-        eps = self.envs.drain()
+        eps, terms = self.envs.drain()
         walks = [e for e in eps if not e["turning"]]
         n = self.cfg.ppo.steps_per_env * self.envs.num_envs
         row = {
@@ -146,6 +146,7 @@ class Trainer:
             "collect_s": round(t_collect, 2),
             "learn_s": round(t_learn, 2),
             "action_std": round(self.ac.log_std.exp().mean().item(), 4),
+            "reward_terms": {k: round(v, 6) for k, v in terms.items()},
         } | {k: round(v, 6) for k, v in losses.items()}
         with open(self.out / LOG, "a") as f:
             f.write(json.dumps(row) + "\n")
