@@ -53,9 +53,16 @@ class Go1Envs:
         cfg: The training configuration.
         rng: The run's generator (every random draw comes from it).
         spec: The observation layout.
+        levels: Each robot's terrain level (default: random up to ``max_init_level``).
     """
 
-    def __init__(self, cfg: TrainConfig, rng: np.random.Generator, spec: PolicySpec) -> None:
+    def __init__(
+        self,
+        cfg: TrainConfig,
+        rng: np.random.Generator,
+        spec: PolicySpec,
+        levels: np.ndarray | None = None,
+    ) -> None:
         self.cfg, self.rng, self.spec = cfg, rng, spec
         e = cfg.env
         self.gains = load_gains()
@@ -64,7 +71,7 @@ class Go1Envs:
         self.kinds = [
             KINDS[1] if rng.random() < e.ramp_share else KINDS[0] for _ in range(e.num_envs)
         ]
-        start = rng.integers(0, e.max_init_level + 1, e.num_envs)
+        start = rng.integers(0, e.max_init_level + 1, e.num_envs) if levels is None else levels
         self.curriculum = Curriculum(cfg.curriculum, e.levels, start, rng)
         self.robots: list[_Robot | None] = [None] * e.num_envs
         self.finished: list[dict] = []  # episodes ended since the last drain

@@ -54,7 +54,7 @@ class Trainer:
             path = self.out / CHECKPOINT
             if not path.is_file():
                 raise InvalidArgumentError(f"--resume: no checkpoint at {path}")
-            ckpt = torch.load(path, map_location=device, weights_only=False)
+            ckpt = torch.load(path, map_location="cpu", weights_only=False)  # RNG states: CPU
             cfg = config_from_json(ckpt["config"], str(path))
         elif (self.out / CHECKPOINT).exists():
             raise InvalidArgumentError(
@@ -71,7 +71,7 @@ class Trainer:
         if ckpt is not None:
             self.rng.bit_generator.state = ckpt["numpy_rng"]
             self.gen.set_state(ckpt["torch_rng"])
-        self.envs = Go1Envs(cfg, self.rng, self.spec)
+        self.envs = Go1Envs(cfg, self.rng, self.spec, ckpt["levels"] if ckpt else None)
         self.ac = ActorCritic(
             self.spec.obs_size, self.spec.action_size, cfg.ppo, self.spec.clip_obs
         ).to(device)
@@ -81,7 +81,6 @@ class Trainer:
             self.ppo.opt.load_state_dict(ckpt["optimizer"])
             self.ppo.lr = ckpt["learning_rate"]
             self.iteration, self.env_steps = ckpt["iteration"], ckpt["env_steps"]
-            self.envs.curriculum.level[:] = ckpt["levels"]
 
     def train(self, iterations: int | None = None) -> None:
         """Runs until ``iterations`` in all (default: the config's), checkpointing as it goes."""

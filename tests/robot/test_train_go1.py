@@ -102,6 +102,21 @@ def test_tiny_run_checkpoints_resumes_and_exports(tmp_path: Path) -> None:
     assert main(["--out", str(tmp_path / "none"), "--resume"]) == 2
 
 
+def test_resume_restores_levels_and_generators(tmp_path: Path) -> None:
+    torch = pytest.importorskip("torch")
+    from havln_mj.train_go1.trainer import Trainer
+
+    first = Trainer(config_from_json(TINY), tmp_path / "run")
+    first.train(2)
+    ckpt = torch.load(tmp_path / "run" / "checkpoint.pt", weights_only=False)
+    again = Trainer(config_from_json({}), tmp_path / "run", resume=True)
+    assert again.cfg == first.cfg  # the run's own config, not the one passed
+    assert again.iteration == 2
+    np.testing.assert_array_equal(again.envs.curriculum.level, ckpt["levels"])
+    state = again.gen.get_state()
+    assert torch.equal(state, ckpt["torch_rng"])
+
+
 def test_same_seed_same_run(tmp_path: Path) -> None:
     pytest.importorskip("torch")
     from havln_mj.train_go1.trainer import Trainer
