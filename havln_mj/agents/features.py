@@ -2,9 +2,12 @@
 
 A feature set is named by the vision encoder (a digest of its weights), the view configuration
 and the people seed; it lives in ``$HAVLN_CACHE/agents/features/<name>/`` with one
-``<scan>.npz`` per scan: ``viewpoints`` (V,) and ``features`` (V, 36, S, D) float16. Files are
-written atomically, so an interrupted build leaves whole scans or nothing, and a re-run only
-renders what is missing.
+``<scan>.npz`` per scan: ``viewpoints`` (V,), ``features`` (V, 36, S, D) float16 and
+``complete``, whether V covers every viewpoint of the scan. A feature build writes whole scans;
+an evaluation adds the viewpoints its agent reaches, one at a time
+(:meth:`FeatureStore.add`), so a trained agent is scored without rendering the viewpoints it
+never visits. Files are written atomically, so an interrupted build leaves whole files, and a
+re-run only renders what is missing.
 """
 
 from __future__ import annotations
@@ -12,6 +15,7 @@ from __future__ import annotations
 import io
 import json
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +34,26 @@ def features_root() -> Path:
     return cache_dir("agents", "features")
 
 
+@dataclass(frozen=True)
+class _Scan:
+    """One scan's cached features.
+
+    Attributes:
+        rows: Viewpoint id → row.
+        features: ``(V, 36, S, D)`` float16.
+        complete: Whether the rows cover every viewpoint of the scan.
+    """
+
+    rows: dict[str, int]
+    features: np.ndarray
+    complete: bool
+
+    @classmethod
+    def of(cls, viewpoints: list[str], features: np.ndarray, complete: bool) -> _Scan:
+        rows = {vp: i for i, vp in enumerate(viewpoints)}
+        return cls(rows, features.astype(np.float16, copy=False), bool(complete))
+
+
 class FeatureStore:
     """One feature set: view features of many scans, looked up per agent state.
 
@@ -43,7 +67,7 @@ class FeatureStore:
         self.folder = Path(folder)
         self.config = config
         self.dim = int(dim)
-        self._scans: dict[str, tuple[dict[str, int], np.ndarray]] = {}
+        self._scans: dict[str, _Scan] = {}
 
     @classmethod
     def named(cls, name: str, config: ViewConfig, dim: int) -> FeatureStore:
@@ -77,27 +101,65 @@ class FeatureStore:
         return self.folder / f"{scan_id}.npz"
 
     def has(self, scan_id: str) -> bool:
-        """Whether the scan's features are cached."""
-        return self.path(scan_id).is_file()
+        """Whether every viewpoint of the scan is cached."""
+        return self.path(scan_id).is_file() and self.scan(scan_id).complete
+
+    def has_viewpoint(self, scan_id: str, viewpoint: str) -> bool:
+        """Whether one viewpoint's features are cached."""
+        return self.path(scan_id).is_file() and viewpoint in self.scan(scan_id).rows
 
     def put(self, scan_id: str, viewpoints: list[str], features: np.ndarray) -> None:
-        """Stores a scan's features ``(V, 36, S, D)`` atomically.
+        """Stores the features ``(V, 36, S, D)`` of every viewpoint of a scan, atomically.
 
         Raises:
             MalformedDataError: The array does not have the set's shape.
         """
+        self._check(scan_id, viewpoints, features)
+        self._write(scan_id, _Scan.of(viewpoints, features, complete=True))
+
+    def add(self, scan_id: str, viewpoints: list[str], features: np.ndarray) -> None:
+        """Adds some viewpoints' features ``(V, 36, S, D)`` to a scan's file, atomically.
+
+        What the file holds when this is called (another process may have added to it) is
+        kept; a viewpoint already there keeps its features.
+
+        Raises:
+            MalformedDataError: The array does not have the set's shape.
+        """
+        self._check(scan_id, viewpoints, features)
+        self._scans.pop(scan_id, None)
+        old = self.scan(scan_id) if self.path(scan_id).is_file() else None
+        if old is None:
+            merged = _Scan.of(viewpoints, features, complete=False)
+        else:
+            new = [i for i, vp in enumerate(viewpoints) if vp not in old.rows]
+            merged = _Scan.of(
+                list(old.rows) + [viewpoints[i] for i in new],
+                np.concatenate([old.features, features[new].astype(np.float16)]),
+                complete=old.complete,
+            )
+        self._write(scan_id, merged)
+
+    def _check(self, scan_id: str, viewpoints: list[str], features: np.ndarray) -> None:
         want = (len(viewpoints), NUM_VIEWS, self.config.slots, self.dim)
         if features.shape != want:
             raise MalformedDataError(
                 f"features of {scan_id} have shape {features.shape}, expected {want}"
             )
-        buf = io.BytesIO()
-        np.savez(buf, viewpoints=np.array(viewpoints), features=features.astype(np.float16))
-        atomic_write_bytes(self.path(scan_id), buf.getvalue())
-        self._scans.pop(scan_id, None)
 
-    def scan(self, scan_id: str) -> tuple[dict[str, int], np.ndarray]:
-        """A scan's viewpoint → row map and its ``(V, 36, S, D)`` features (loaded once).
+    def _write(self, scan_id: str, entry: _Scan) -> None:
+        buf = io.BytesIO()
+        np.savez(
+            buf,
+            viewpoints=np.array(list(entry.rows)),
+            features=entry.features,
+            complete=np.array(entry.complete),
+        )
+        atomic_write_bytes(self.path(scan_id), buf.getvalue())
+        self._scans[scan_id] = entry
+
+    def scan(self, scan_id: str) -> _Scan:
+        """A scan's cached features (loaded once).
 
         Raises:
             MissingDataError: The scan has no features in this set.
@@ -115,11 +177,12 @@ class FeatureStore:
         try:
             with np.load(path) as z:
                 vps, feats = [str(v) for v in z["viewpoints"]], z["features"]
+                complete = bool(z["complete"]) if "complete" in z.files else True
         except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
             raise MalformedDataError(f"feature file {path} is damaged: {exc}") from None
         if feats.shape != (len(vps), NUM_VIEWS, self.config.slots, self.dim):
             raise MalformedDataError(f"feature file {path} has shape {feats.shape}")
-        entry = ({vp: i for i, vp in enumerate(vps)}, feats)
+        entry = _Scan.of(vps, feats, complete)
         self._scans[scan_id] = entry
         return entry
 
@@ -129,10 +192,10 @@ class FeatureStore:
         Raises:
             MissingDataError: The viewpoint is not in the scan's features.
         """
-        rows, feats = self.scan(scan_id)
-        row = rows.get(viewpoint)
+        entry = self.scan(scan_id)
+        row = entry.rows.get(viewpoint)
         if row is None:
             raise MissingDataError(
                 f"viewpoint {viewpoint!r} of {scan_id} has no features in {self.folder}"
             )
-        return feats[row, view_index, self.config.slot(time)]
+        return entry.features[row, view_index, self.config.slot(time)]

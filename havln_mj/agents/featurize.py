@@ -15,7 +15,7 @@ import hashlib
 import io
 import pickle
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -198,15 +198,21 @@ def encode_scans(
     progress: bool = True,
 ) -> None:
     """Renders and encodes every scene not yet in ``store`` (one file per scene)."""
-    cfg = store.config
     missing = [s for s in scenes if not store.has(s)]
     for scene in tqdm(missing, desc="features", unit="scene", disable=not progress):
-        vps, feats = [], []
-        for v in renderer.render(scene):
-            rgb, depth = _images([v], cfg)
-            feats.append(encode_views(encoder, rgb, depth).reshape(-1, cfg.slots, store.dim))
-            vps.append(v.viewpoint)
-        store.put(scene, vps, np.stack(feats))
+        store.put(scene, *encode_viewpoints(encoder, renderer.render(scene), store.config))
+
+
+def encode_viewpoints(
+    encoder: ViewEncoder, views: Iterable[ViewpointViews], cfg: ViewConfig
+) -> tuple[list[str], np.ndarray]:
+    """The viewpoint ids of ``views`` and their ``(V, 36, S, D)`` features."""
+    vps, feats = [], []
+    for v in views:
+        rgb, depth = _images([v], cfg)
+        feats.append(encode_views(encoder, rgb, depth).reshape(-1, cfg.slots, encoder.out_dim))
+        vps.append(v.viewpoint)
+    return vps, np.stack(feats)
 
 
 def build_features(

@@ -1,11 +1,12 @@
 """Trained agents as experts of the evaluation harness (``python -m havln_mj.eval --agent X.pt``).
 
 :class:`AgentExpert` follows the :class:`havln_mj.tasks.experts.Expert` protocol: at each step
-it reads the observation (the cached feature of the current view, rendered on first use of a
-scan with the evaluation's people seed, plus the agent's own inputs), masks the invalid
-actions and asks the network. VLN-DT conditions on the return still to go: the reward of each
-action (the one it was trained with) is computed from the simulator's outcome, as a decision
-transformer is evaluated.
+it reads the observation (the cached feature of the current view plus the agent's own
+inputs), masks the invalid actions and asks the network. A viewpoint's features are rendered,
+with the evaluation's people seed, the first time an agent stands on it, and added to the
+feature cache: an evaluation renders only the viewpoints its agent reaches. VLN-DT conditions
+on the return still to go: the reward of each action (the one it was trained with) is
+computed from the simulator's outcome, as a decision transformer is evaluated.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from havln_mj.agents.checkpoint import AgentBundle
-from havln_mj.agents.featurize import encode_scans, feature_store
+from havln_mj.agents.featurize import encode_viewpoints, feature_store
 from havln_mj.agents.observations import action_mask, observe
 from havln_mj.agents.rollouts import INSTRUCTION_LENGTH
 from havln_mj.agents.views import ViewRenderer
@@ -67,20 +68,25 @@ class AgentExpert:
         self.max_steps = max_steps
         self._spec = dataclasses.replace(bundle.features, seed=int(seed))
         self._render = {"connectivity_dir": connectivity_dir, "human_placements": human_placements}
+        self._renderer: ViewRenderer | None = None
         self.store = feature_store(bundle.encoder, self._spec)
         self.policy = make_policy(bundle)
         reward = bundle.model_config.get("reward", "paper")
         self._reward = get_reward(reward)
         self._distance = 0.0
 
-    def _ensure_features(self, scan: str) -> None:
-        if self.store.has(scan):
+    def _ensure_features(self, scan: str, viewpoint: str) -> None:
+        if self.store.has_viewpoint(scan, viewpoint):
             return
-        with ViewRenderer(self._spec.view, seed=self._spec.seed, **self._render) as renderer:
-            encode_scans(renderer, self.bundle.encoder, self.store, [scan], progress=False)
+        if self._renderer is None:
+            self._renderer = ViewRenderer(
+                self._spec.view, seed=self._spec.seed, person_masks=False, **self._render
+            )
+        views = self._renderer.render(scan, [viewpoint])
+        self.store.add(scan, *encode_viewpoints(self.bundle.encoder, views, self._spec.view))
 
     def reset(self, ctx: ExpertContext) -> None:
-        """Encodes the instruction and prepares the scan's features.
+        """Encodes the instruction.
 
         Raises:
             InvalidArgumentError: The simulator does not use discretised views (agents look
@@ -92,7 +98,6 @@ class AgentExpert:
                 "trained agents need setDiscretizedViewingAngles(True): they observe the 36 "
                 "discrete views"
             )
-        self._ensure_features(ctx.episode.scan)
         ids = self.bundle.vocab.encode(ctx.instruction_text, INSTRUCTION_LENGTH)
         self.policy.reset(ids)
         self._distance = ctx.graph.distance(state.location.viewpointId, ctx.goal)
@@ -106,6 +111,7 @@ class AgentExpert:
             outcome = StepOutcome(False, distance, distance - self._distance, bool(state.isCrushed))
             last_reward = step_reward(self._reward, outcome)
         self._distance = distance
+        self._ensure_features(state.scanId, state.location.viewpointId)
         mask = action_mask(state, half)
         action = self.policy.act(observe(self.store, state, mask), mask, last_reward)
         return EgoAction(action)

@@ -114,7 +114,8 @@ class ViewpointViews:
         viewpoint: Viewpoint id.
         rgb: ``(36, S, H, W, 3)`` uint8.
         depth: ``(36, S, H, W)`` float16 metres (0 = no reading), or None.
-        person: ``(36, S)`` float32 fraction of pixels showing a person.
+        person: ``(36, S)`` float32 fraction of pixels showing a person (None when the
+            renderer draws no person masks).
         forward: ``(36,)`` bool, FORWARD would move from the view.
         region: Region class (index into :data:`REGION_CODES`), -1 when unknown.
     """
@@ -122,7 +123,7 @@ class ViewpointViews:
     viewpoint: str
     rgb: np.ndarray
     depth: np.ndarray | None
-    person: np.ndarray
+    person: np.ndarray | None
     forward: np.ndarray
     region: int
 
@@ -136,6 +137,8 @@ class ViewRenderer:
         humans: Whether scans have people.
         connectivity_dir: Navigation graphs of real scans (graph proxies or meshes).
         human_placements: HA3D placement file for the real scans.
+        person_masks: Whether to draw the person masks of the ``person`` target (pretraining
+            needs them; encoding views does not, and skips their second render pass).
     """
 
     def __init__(
@@ -146,8 +149,10 @@ class ViewRenderer:
         humans: bool = True,
         connectivity_dir: str | Path | None = None,
         human_placements: str | Path | None = None,
+        person_masks: bool = True,
     ) -> None:
         self.config = config
+        self._person_masks = person_masks
         self._connectivity_dir = connectivity_dir
         sim = Simulator(humans=humans, human_placements=human_placements)
         if connectivity_dir is not None:
@@ -158,7 +163,7 @@ class ViewRenderer:
         sim.setDepthEnabled(config.depth)
         sim.set_depth_units("metres")
         sim.set_color_order("RGB")
-        sim.set_human_mask_enabled(True)
+        sim.set_human_mask_enabled(person_masks)
         sim.setDiscretizedViewingAngles(True)
         sim.setRenderingEnabled(True)
         sim.setCacheSize(1)  # scans are rendered one after another
@@ -197,7 +202,7 @@ class ViewRenderer:
             sim.newEpisode([scan_id] * n, [vp] * n, self._headings, self._elevations)
             rgb = np.empty((*shape, 3), np.uint8)
             depth = np.empty(shape, np.float16) if cfg.depth else None
-            person = np.empty((n, cfg.slots), np.float32)
+            person = np.empty((n, cfg.slots), np.float32) if self._person_masks else None
             for k in range(cfg.slots):
                 if k:
                     sim.wait([cfg.slot_seconds] * n)
@@ -206,7 +211,8 @@ class ViewRenderer:
                     rgb[v, k] = state.rgb
                     if depth is not None:
                         depth[v, k] = np.minimum(state.depth[..., 0], MAX_DEPTH)
-                    person[v, k] = float(state.humanMask.mean())
+                    if person is not None:
+                        person[v, k] = float(state.humanMask.mean())
                 if k == 0:
                     forward = np.array([forward_possible(s, cfg.half_hfov) for s in states])
             yield ViewpointViews(vp, rgb, depth, person, forward, regions.get(vp, -1))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +12,7 @@ import pytest
 torch = pytest.importorskip("torch")
 
 from havln_mj.agents.checkpoint import AgentBundle  # noqa: E402
+from havln_mj.agents.featurize import feature_store  # noqa: E402
 from havln_mj.agents.train import Trainer, main, read_config  # noqa: E402
 from havln_mj.commands.evaluate import main as eval_main  # noqa: E402
 from havln_mj.errors import InvalidArgumentError, MissingDataError  # noqa: E402
@@ -74,6 +76,15 @@ def test_vln_cm_trains_writes_its_files_and_is_evaluated(tmp_path, capsys):
     assert summary["instructions"] == 6 and 0.0 <= summary["sr"] <= 1.0
     episodes = json.loads((ev / "episodes.json").read_text())
     assert all(e["steps"] <= 30 for e in episodes)
+    # Only the viewpoints the agent stood on were rendered, and the cache says it is partial.
+    bundle = AgentBundle.load(out / "best.pt")
+    cached = feature_store(bundle.encoder, replace(bundle.features, seed=0)).scan("proc-5")
+    visited = {
+        step[0]
+        for s in json.loads((ev / "submission.json").read_text())
+        for step in s["trajectory"]
+    }
+    assert cached.rows and set(cached.rows) <= visited and not cached.complete
 
 
 def test_vln_dt_trains_on_random_walks_and_is_evaluated(tmp_path, capsys):
