@@ -25,6 +25,10 @@ navigation, identical on both sides):
   their people (``Simulator(humans=True)``, every action runs the collision check), MatterSim.
 * ``proc0_30people``: ``proc-0`` alone, ours without people, with 30 people, MatterSim.
 
+``--compare DIR`` also runs every side of ours from the package in ``DIR`` (a checkout of
+another version, e.g. a ``git worktree`` of ``main``), as ``<side>@compare``, in the same
+alternation, and adds the ratios of each side to its twin (``<side>/<side>@compare``).
+
 Prints one JSON object. Run: ``python benchmarks/bench_peers.py [--seconds S] [--rounds N]``.
 """
 
@@ -233,10 +237,12 @@ def worker(args: argparse.Namespace) -> None:
 def _run_side(
     side: tuple, plan: Path, graphs: Path, peer: Path | None, seconds: float, discrete: bool
 ) -> dict:
-    _, which, people = side
+    _, which, people, package = side
     env = dict(os.environ)
     if which == "mattersim":
         env["PYTHONPATH"] = str(peer)
+    elif package is not None:  # another version of ours
+        env["PYTHONPATH"] = str(package)
     cmd = [sys.executable, __file__, "--worker", which, "--people", people]
     cmd += ["--plan", str(plan), "--graphs", str(graphs), "--seconds", str(seconds)]
     if discrete:
@@ -251,6 +257,9 @@ def run_workload(name: str, args, tmp: Path, peer: Path | None) -> dict:
     kind, batch, sides = WORKLOADS[name]
     if peer is None:
         sides = [s for s in sides if s[1] != "mattersim"]
+    sides = [(*s, None) for s in sides]
+    if args.compare is not None:
+        sides += [(f"{s[0]}@compare", s[1], s[2], args.compare) for s in sides if s[1] == "ours"]
     graphs, ids = graph_folder(kind, args.data, tmp)
     plan = tmp / f"plan-{name}.json"
     make_plan(graphs, ids, batch, args.seed, plan)
@@ -278,9 +287,19 @@ def run_workload(name: str, args, tmp: Path, peer: Path | None) -> dict:
         ("ours_people", "ours"),
         ("ours_30people", "ours"),
     ):
-        if a in out and b in out:
-            ratios[f"{a}/{b}"] = round(out[a]["steps_per_s"] / out[b]["steps_per_s"], 3)
-            ratios[f"{a}/{b}_cpu"] = round(out[a]["steps_per_cpu_s"] / out[b]["steps_per_cpu_s"], 3)
+        for suffix in ("", "@compare"):
+            a_, b_ = a + suffix, b if b == "mattersim" else b + suffix
+            if a_ in out and b_ in out:
+                ratios[f"{a_}/{b_}"] = round(out[a_]["steps_per_s"] / out[b_]["steps_per_s"], 3)
+                ratios[f"{a_}/{b_}_cpu"] = round(
+                    out[a_]["steps_per_cpu_s"] / out[b_]["steps_per_cpu_s"], 3
+                )
+    for side in runs:
+        twin = f"{side}@compare"
+        if twin in out:
+            ratios[f"{side}/{twin}_cpu"] = round(
+                out[side]["steps_per_cpu_s"] / out[twin]["steps_per_cpu_s"], 3
+            )
     out["ratios"] = ratios
     return out
 
@@ -295,6 +314,7 @@ def main() -> int:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--workloads", nargs="+", default=list(WORKLOADS), choices=list(WORKLOADS))
+    ap.add_argument("--compare", type=Path, default=None, help="another checkout of ours to run")
     # worker mode (one side in a fresh process)
     ap.add_argument("--worker", choices=["ours", "mattersim"], help=argparse.SUPPRESS)
     ap.add_argument("--people", default="none", help=argparse.SUPPRESS)
@@ -321,6 +341,7 @@ def main() -> int:
         "machine": machine(),
         "peer": {"mattersim": str(peer) if peer else None, "status": how},
         "seconds": args.seconds,
+        "compare": str(args.compare) if args.compare else None,
         "workloads": {},
     }
     with tempfile.TemporaryDirectory() as tmp:

@@ -4,7 +4,8 @@
 # HA-VLN paper's rows; and eval/ha3d_viewpoint_stats.json. See eval/ha3d_protocol.md.
 # Usage: eval/ha3d_protocol.sh DATA_DIR [RUNS_DIR]
 #   DATA_DIR holds mp3d_connectivity/, ha_r2r/HA_val_seen.json and ha3d/human_placements.json
-#   (CI: ../shared/data). Trained agents: set CM=path/to/vln_cm.pt and DT=path/to/vln_dt.pt.
+#   (CI: ../shared/data). Trained agents: set CM=path/to/vln_cm.pt and DT=path/to/vln_dt.pt
+#   (the table's rows: CM=agents/vln_cm_small.pt DT=agents/vln_dt_small.pt).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 D=$(realpath "$1"); RUNS=${2:-runs/ha3d_protocol}

@@ -17,8 +17,10 @@ the ids of the meshes whose vertices changed, which each renderer must re-upload
 
 A renderer draws every geom it is given, in view or not, and a dressed person is thousands
 of textured triangles: :meth:`PeoplePoser.hide_unseen` leaves out of the scene (alpha 0, which
-MuJoCo skips) the people whose bounding sphere lies wholly outside a camera's view, and
-:meth:`PeoplePoser.show_all` puts them back after the frame. The image does not change.
+MuJoCo skips) what lies wholly outside a camera's view: each rigid piece whose bounding sphere
+does (a person half in view keeps only the pieces that may show), and each skinned person
+whose sphere around the pelvis does. :meth:`PeoplePoser.show_all` puts them back after the
+frame. The image does not change.
 """
 
 from __future__ import annotations
@@ -86,10 +88,15 @@ class PeoplePoser:
                 if shape.look is not None and skin is None
             }
         self._anny = AnnySkinWriter(model, anny) if anny else None
-        self._visibility(model, [shape.height for shape in crowd.shapes])
+        self._visibility(model, [shape.height for shape in crowd.shapes], set(smpl) | set(anny))
 
-    def _visibility(self, model: mujoco.MjModel, heights: list[float]) -> None:
-        """Each person's geoms, their alphas, and a sphere around the pelvis holding them."""
+    def _visibility(self, model: mujoco.MjModel, heights: list[float], skinned: set[int]) -> None:
+        """Each person's geoms, their alphas and the spheres that hold them in any pose.
+
+        A rigid piece (or capsule) is held by its own bounding sphere about its frame; a
+        skinned mesh changes shape every frame, so its person is held by a sphere about the
+        pelvis instead.
+        """
         owner = re.compile(r"human(\d+)/")
         geoms, people = [], []
         for g in np.flatnonzero(model.geom_group == groups.HUMANS):
@@ -100,6 +107,8 @@ class PeoplePoser:
         self._geoms = np.asarray(geoms, int)
         self._owner = np.asarray(people, int)
         self._alpha = model.geom_rgba[self._geoms, 3].copy()
+        self._skinned = np.isin(self._owner, sorted(skinned))
+        self._bound = model.geom_rbound[self._geoms] + PIECE_MARGIN_M
         # Nothing of a person (limbs, hair, a skirt) reaches farther from the pelvis than
         # their height: a sphere of that radius plus a margin holds them in any pose.
         self._radius = np.asarray(heights, float) + SPHERE_MARGIN_M
@@ -124,27 +133,23 @@ class PeoplePoser:
         return changed
 
     def hide_unseen(self, data: mujoco.MjData, camera: int, aspect: float) -> bool:
-        """Leaves out of the next frame the people wholly outside camera ``camera``'s view.
+        """Leaves out of the next frame what lies wholly outside camera ``camera``'s view.
 
         Call after :meth:`pose` and kinematics; ``aspect`` is the image's width / height.
-        Returns whether anyone was left out (then call :meth:`show_all` after the frame).
+        Returns whether anything was left out (then call :meth:`show_all` after the frame).
         """
         if self._pelvis is None or not len(self._geoms):
             return False
-        rel = (self._pelvis - data.cam_xpos[camera]) @ data.cam_xmat[camera].reshape(3, 3)
-        x, y, depth = rel[:, 0], rel[:, 1], -rel[:, 2]  # the camera looks along its −z
+        cam_pos, cam_rot = data.cam_xpos[camera], data.cam_xmat[camera].reshape(3, 3)
         tan_v = math.tan(math.radians(float(self.model.cam_fovy[camera])) / 2)
-        tan_h = tan_v * aspect
-        r = self._radius
-        # Distances to the four side planes (positive outside) and behind the camera.
-        outside = (
-            (depth < -r)
-            | ((np.abs(x) - depth * tan_h) / math.hypot(1.0, tan_h) > r)
-            | ((np.abs(y) - depth * tan_v) / math.hypot(1.0, tan_v) > r)
-        )
+        view = (tan_v * aspect, tan_v)
+        outside = _outside(data.geom_xpos[self._geoms] - cam_pos, cam_rot, view, self._bound)
+        if self._skinned.any():
+            people = _outside(self._pelvis - cam_pos, cam_rot, view, self._radius)
+            outside = np.where(self._skinned, people[self._owner], outside)
         if not outside.any():
             return False
-        self.model.geom_rgba[self._geoms, 3] = np.where(outside[self._owner], 0.0, self._alpha)
+        self.model.geom_rgba[self._geoms, 3] = np.where(outside, 0.0, self._alpha)
         return True
 
     def show_all(self) -> None:
@@ -154,5 +159,25 @@ class PeoplePoser:
 
 SPHERE_MARGIN_M = 0.3
 """Metres added to a person's height for the sphere around the pelvis that holds them."""
+
+PIECE_MARGIN_M = 0.01
+"""Metres added to a rigid piece's bounding sphere (its vertices are drawn in single precision)."""
+
+
+def _outside(rel: np.ndarray, cam_rot: np.ndarray, view: tuple, radius: np.ndarray) -> np.ndarray:
+    """Which spheres (centres ``rel`` from the camera, world axes) lie wholly outside its view.
+
+    ``view`` holds the tangents of the half field of view, horizontally and vertically.
+    """
+    x, y, depth = (rel @ cam_rot).T
+    depth = -depth  # the camera looks along its −z
+    tan_h, tan_v = view
+    # Distances to the four side planes (positive outside) and behind the camera.
+    return (
+        (depth < -radius)
+        | ((np.abs(x) - depth * tan_h) / math.hypot(1.0, tan_h) > radius)
+        | ((np.abs(y) - depth * tan_v) / math.hypot(1.0, tan_v) > radius)
+    )
+
 
 __all__ = ["DRAW_STYLES", "PeopleDrawing", "PeoplePoser"]

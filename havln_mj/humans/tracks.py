@@ -82,6 +82,9 @@ class PelvisTable:
             values, last, loop, period, start_f + fps * UNROLLED_S
         )
         self._person = (fps, start_f, period, loop, last, base, start_f + unrolled_base)
+        # Each person's (fps, where simulated time 0 is on the unrolled axis), as floats.
+        zero_at = (start_f + unrolled_base).tolist()
+        self.unrolled_frames = list(zip(fps.tolist(), zero_at, strict=True))
         self._everyone = _Columns(*self._person)
         self._subsets: dict[tuple[int, ...], _Columns] = {}
 

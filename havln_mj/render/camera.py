@@ -67,6 +67,7 @@ FAR_M = 100.0
 
 _CATMASK = int(mujoco.mjtCatBit.mjCAT_STATIC) | int(mujoco.mjtCatBit.mjCAT_DYNAMIC)
 _OFFSCREEN = int(mujoco.mjtFramebuffer.mjFB_OFFSCREEN)
+_GL_RGB, _GL_BGR = 0x1907, 0x80E0  # OpenGL's pixel formats (MjrContext.readPixelFormat)
 
 
 @dataclass(frozen=True)
@@ -248,7 +249,9 @@ class Camera:
 
     # ------------------------------------------------------------------ rendering
 
-    def render(self, data: mujoco.MjData, *, rgb: bool = True, depth: bool = True) -> Frame:
+    def render(
+        self, data: mujoco.MjData, *, rgb: bool = True, depth: bool = True, bgr: bool = False
+    ) -> Frame:
         """Renders the camera's view of ``data`` in one pass.
 
         The caller has already run kinematics (``mj_forward``/``mj_kinematics`` and
@@ -258,6 +261,7 @@ class Camera:
             data: State to render.
             rgb: Whether to return colour.
             depth: Whether to return depth.
+            bgr: Colour in BGR order (read so from OpenGL: no conversion afterwards).
 
         Returns:
             A :class:`Frame` with fresh arrays (fields not requested are None).
@@ -277,12 +281,18 @@ class Camera:
         )
         mujoco.mjr_setBuffer(_OFFSCREEN, self._ctx)
         mujoco.mjr_render(self._rect, self._scene, self._ctx)
-        mujoco.mjr_readPixels(
-            self._rgb_raw if rgb else None,
-            self._depth_raw if depth else None,
-            self._rect,
-            self._ctx,
-        )
+        if bgr:
+            self._ctx.readPixelFormat = _GL_BGR
+        try:
+            mujoco.mjr_readPixels(
+                self._rgb_raw if rgb else None,
+                self._depth_raw if depth else None,
+                self._rect,
+                self._ctx,
+            )
+        finally:
+            if bgr:
+                self._ctx.readPixelFormat = _GL_RGB  # MuJoCo's, which other passes read
         # OpenGL rows run bottom-up; flipping while copying gives fresh, top-first arrays.
         rgb_out = self._rgb_raw[::-1].copy() if rgb else None
         depth_out = self._linear_depth() if depth else None
@@ -355,7 +365,9 @@ class Camera:
         raw = self._depth_raw[::-1]
         out = np.add(raw, coef[2], dtype=np.float32)
         np.divide(coef[3], out, out=out)
-        out[raw <= 0.0] = 0.0
+        # Empty pixels read 0: out is finite there, so a product is exact (and faster than a
+        # masked write).
+        np.multiply(out, raw > 0.0, out=out)
         return out
 
     # ------------------------------------------------------------------ lifetime

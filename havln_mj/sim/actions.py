@@ -60,6 +60,21 @@ def check_graph_steps(
         InvalidActionError: An index is out of range or a delta is not finite.
     """
     n = len(elements)
+    if (
+        n == 1
+        and type(indices) is type(headings) is type(elevations) is list
+        and len(indices) == len(headings) == len(elevations) == 1
+    ):
+        # A batch of one (hot): the common values, checked at once.
+        k, dh, de = indices[0], headings[0], elevations[0]
+        if (
+            type(k) is int
+            and 0 <= k < len(elements[0].navigable)
+            and type(dh) is type(de) is float
+            and math.isfinite(dh)
+            and math.isfinite(de)
+        ):
+            return [(0, k, dh, de)]
     if not (type(indices) is list and len(indices) == n):
         indices = per_element("index", indices, n)
     if not (type(headings) is list and len(headings) == n):

@@ -23,7 +23,7 @@ import numpy as np
 from havln_mj.frames import TWO_PI
 from havln_mj.sim.body import Body, BodyKind, Film, Outcome
 from havln_mj.sim.crowd import NO_PROXIMITY, Crowd, Proximity, ha3d_points, state_proximity
-from havln_mj.sim.frame import View
+from havln_mj.sim.frame import View, ViewSettings
 from havln_mj.sim.images import ImageFormat
 from havln_mj.sim.navigation import NavTable
 from havln_mj.sim.proximity import NearMemo, batch_proximity, knots_proximity, sample_knots
@@ -109,8 +109,19 @@ class Batch:
         self.reactions = None  # how people react to the agent (None: they do not)
         self._near = NearMemo()
         self._cos_fov: float | None = None
+        self._view: ViewSettings | None = None  # the state images' view settings
         self._blank: tuple[np.ndarray, np.ndarray] | None = None
         self._revision = -1  # the settings' revision _cos_fov and _blank were derived from
+
+    @property
+    def clock(self) -> HumanClock:
+        """The people's clock."""
+        return self._clock
+
+    @clock.setter
+    def clock(self, clock: HumanClock) -> None:
+        self._clock = clock
+        self._continuous = clock.kind == "continuous"  # read at every state
 
     def view(self, heading: float, elevation: float) -> tuple[float, float, int]:
         """Heading, elevation and view index under the view rules."""
@@ -138,7 +149,7 @@ class Batch:
             elements.append(el)
         self.elements = elements
         self._prepare_step()
-        shared = self._tick(self.clock.after_start)
+        shared = self._tick(self._clock.after_start)
         started = []
         for i, (el, start) in enumerate(zip(elements, starts, strict=True)):
             el.people_t = shared if shared is not None else el.time
@@ -149,10 +160,10 @@ class Batch:
 
     def _tick(self, advance: Callable[[int], int]) -> float | None:
         """Advances HA3D's shared counter and returns the people's time (None: own clocks)."""
-        if self.clock.kind != "ha3d":
+        if self._continuous:
             return None
         self.frame = advance(self.frame)
-        return self.clock.seconds(self.frame)
+        return self._clock.seconds(self.frame)
 
     def _new_film(self, i: int, el: Element) -> Film | None:
         if self.film is None or not self.cfg.rendering:
@@ -163,7 +174,7 @@ class Batch:
             t0 = time.perf_counter()
             settings = self.cfg.view_settings()
             # On HA3D's clock people hold the pose of the state the action leads to.
-            people_t = t if self.clock.kind == "continuous" else el.people_t
+            people_t = t if self._continuous else el.people_t
             views = [el.body.render(settings, el.elevation, people_t)]
             views += [el.body.render(settings, 0.0, people_t, cam) for cam in cameras]
             self.timers["render"] += time.perf_counter() - t0
@@ -181,14 +192,13 @@ class Batch:
         computed in one call once they have all moved.
         """
         cfg = self.cfg
-        discretized, (lo, hi) = cfg.discretized, cfg.elevation_limits
         if cfg.revision != self._revision:
             self._prepare_step()
         shared = None
-        if actions and self.clock.kind == "ha3d":
-            shared = self._tick(self.clock.after_action)
-        along = self.rule.check == "action"
-        elements, deferred = self.elements, []
+        if not self._continuous and actions:
+            shared = self._tick(self._clock.after_action)
+        discretized, (lo, hi) = cfg.discretized, cfg.elevation_limits
+        elements, deferred = self.elements, None
         for n, (i, k, dh, de) in enumerate(actions):
             el = elements[i]
             if shared is not None:
@@ -208,22 +218,33 @@ class Batch:
                     elevation = lo
                 elif elevation > hi:
                     elevation = hi
-            target = el.navigable[k].viewpointId
-            wait_s = WAIT_S if waits is None else waits[n]
-            outcome = el.body.move(target, heading, elevation, el.time, wait_s, el.film)
+            outcome = el.body.move(
+                el.navigable[k].viewpointId,
+                heading,
+                elevation,
+                el.time,
+                WAIT_S if waits is None else waits[n],
+                el.film,
+            )
             if not el.people:
                 self._settle(el, outcome, heading, elevation, index, NO_PROXIMITY)
-            elif along:
-                deferred.append((el, outcome, heading, elevation, index))
-            else:
+            elif self.rule.check != "action":
                 self._settle(el, outcome, heading, elevation, index, None)
+            elif len(actions) == 1:  # one element moved (hot): its signal, then its state
+                threshold = self.rule.threshold
+                contact = knots_proximity(el.crowd, outcome[1], threshold, self._near)
+                self._settle(el, outcome, heading, elevation, index, contact)
+            elif deferred is None:
+                deferred = [(el, outcome, heading, elevation, index)]
+            else:
+                deferred.append((el, outcome, heading, elevation, index))
         if deferred:
             self._settle_all(deferred)
 
     def robot(self, actions: Sequence[str]) -> None:
         """A robot action per element (``"stop"`` leaves it alone)."""
         self._prepare_step()
-        shared = self._tick(self.clock.after_action)
+        shared = self._tick(self._clock.after_action)
         moved = []
         for el, act in zip(self.elements, actions, strict=True):
             if act != "stop":
@@ -234,7 +255,7 @@ class Batch:
         self._settle_all(moved)
 
     def _prepare_step(self) -> None:
-        """What every element's state needs this step: the navigation rule, blank images.
+        """What every element's state needs this step: navigation rule, view, blank images.
 
         Derived once per change of the settings (the camera may change between steps).
         """
@@ -242,6 +263,7 @@ class Batch:
         if cfg.revision != self._revision:
             self._revision = cfg.revision
             self._cos_fov = cfg.cos_half_hfov()
+            self._view = self.format.settings(cfg.view_settings())
             self._blank = None if cfg.rendering else self.format.blank(cfg.width, cfg.height)
 
     def _settle_all(self, moved: list[tuple], starting: bool = False) -> None:
@@ -281,11 +303,12 @@ class Batch:
         signal (None: measured in the state reached, by the batch's rule).
         """
         duration, _, viewpoint, body_heading, arrived, fell, diverged, contacts, _ = outcome
+        t = el.time
         if not starting:
-            el.time += duration
+            el.time = t = t + duration
             el.step += 1
-        if self.clock.kind == "continuous":
-            el.people_t = el.time
+        if self._continuous:
+            el.people_t = t
         el.people_xyz = None
         if heading is None or body_heading != heading:
             heading, elevation, index = self.view(body_heading, elevation)
@@ -294,12 +317,14 @@ class Batch:
         if contact is None:
             contact = self._contact(el, outcome)
         crushed, crushed_by, min_distance = contact
-        if self._blank is None:
+        blank = self._blank
+        if blank is None:
             if starting and el.film is not None:
-                el.film.tick(el.time)
+                el.film.tick(t)
             rgb, depth, mask, semantic, instance = self._images(el)
         else:
-            (rgb, depth), mask, semantic, instance = self._blank, None, None, None
+            rgb, depth = blank
+            mask = semantic = instance = None
         el.state = SimState(
             el.table.scan_id,
             el.step,
@@ -310,7 +335,7 @@ class Batch:
             elevation,
             index,
             navigable,
-            el.time,
+            t,
             1 if crushed else 0,
             crushed_by,
             min_distance,
@@ -353,7 +378,8 @@ class Batch:
         if not cfg.rendering:
             return (*self.format.blank(cfg.width, cfg.height), None, None, None)
         t0 = time.perf_counter()
-        view = el.body.render(self.cfg.view_settings(), el.elevation, el.people_t)
+        self._prepare_step()  # (the settings may have changed since the step began)
+        view = el.body.render(self._view, el.elevation, el.people_t)
         images = self.format.images(view)
         self.timers["render"] += time.perf_counter() - t0
         self.timers["frames"] += 1

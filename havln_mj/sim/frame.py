@@ -42,6 +42,7 @@ class ViewSettings:
         human_mask: Whether the human mask is rendered (a second, segmentation pass).
         labels: Whether semantic and instance labels are rendered (the same second pass:
             :func:`~havln_mj.render.labels.render_labels`).
+        bgr: Whether colour comes in BGR order (MatterSim's), read so from the renderer.
     """
 
     width: int
@@ -50,6 +51,7 @@ class ViewSettings:
     depth: bool = False
     human_mask: bool = False
     labels: bool = False
+    bgr: bool = False
 
 
 @dataclass(frozen=True)
@@ -57,7 +59,7 @@ class View:
     """One rendered view.
 
     Attributes:
-        rgb: H×W×3 ``uint8`` colour.
+        rgb: H×W×3 ``uint8`` colour (in BGR order when the settings asked for it).
         depth: H×W ``float32`` planar depth in metres, or None.
         human_mask: H×W ``bool``, True where a person is seen, or None.
         semantic: H×W ``uint8`` mpcat40 class (42: a person), or None.
@@ -198,6 +200,8 @@ class Frames:
 
             shot = render_skybox_frame(self.model, data, cam, *skybox)
             rgb, depth, mask = shot.rgb, shot.depth, shot.people
+            if settings.bgr:
+                rgb = np.ascontiguousarray(rgb[..., ::-1])
             depth = depth if settings.depth else None
             hidden = False
         else:
@@ -207,7 +211,7 @@ class Frames:
             )
         try:
             if skybox is None:
-                frame = cam.render(data, rgb=True, depth=settings.depth)
+                frame = cam.render(data, rgb=True, depth=settings.depth, bgr=settings.bgr)
                 rgb, depth = frame.rgb, frame.depth
             if settings.labels:
                 from havln_mj.render.labels import PERSON, render_labels

@@ -8,9 +8,11 @@ zero images.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
-from havln_mj.sim.frame import View
+from havln_mj.sim.frame import View, ViewSettings
 
 DEPTH_UNITS_PER_M = 4000.0  # MatterSim / Matterport depth: 0.25 mm per unit
 _UINT16_MAX = 65535
@@ -18,16 +20,10 @@ _UINT16_MAX = 65535
 
 def depth_to_mattersim(depth_m: np.ndarray) -> np.ndarray:
     """Metres to MatterSim's H×W×1 ``uint16`` in 0.25 mm units (out of range reads 0)."""
-    units = np.rint(depth_m * DEPTH_UNITS_PER_M)
+    units = np.multiply(depth_m, DEPTH_UNITS_PER_M)
+    np.rint(units, out=units)
     units *= units <= _UINT16_MAX  # out of range reads 0 (a product: masked writes are slow)
     return units.astype(np.uint16)[..., None]
-
-
-def to_bgr(rgb: np.ndarray) -> np.ndarray:
-    """An RGB ``uint8`` image as a new BGR one."""
-    import cv2  # only when rendering: OpenCV is a large import
-
-    return cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
 
 
 class ImageFormat:
@@ -52,12 +48,17 @@ class ImageFormat:
             self._blank = (rgb, depth)
         return self._blank
 
+    def settings(self, settings: ViewSettings) -> ViewSettings:
+        """``settings`` asking the renderer for colour in this format's order."""
+        return replace(settings, bgr=True) if self.bgr else settings
+
     def images(self, view: View) -> tuple:
         """``(colour, depth, human mask, semantic, instance)`` of a rendered view.
 
+        The view was rendered with :meth:`settings`: its colour is in this format's order.
         Depth is blank when not rendered; the mask and labels are None when not asked for.
         """
-        rgb = to_bgr(view.rgb) if self.bgr else view.rgb
+        rgb = view.rgb
         if view.depth is None:
             h, w = view.rgb.shape[:2]
             depth = self.blank(w, h)[1]

@@ -26,6 +26,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from havln_mj.humans.tracks import UNROLLED_S
 from havln_mj.sim.crowd import COLLISION_DISTANCE, NEAR_M, NO_PROXIMITY, Crowd, Proximity
 
 SAMPLE_HZ = 16.0
@@ -145,9 +146,31 @@ def knots_proximity(
     if table is None:
         times, positions = sample_knots(np.asarray(rows, float).reshape(-1, 4))
         return track_proximity(crowd, times, positions, distance, near)
+    if len(near) == 1 and rows[-1][0] <= UNROLLED_S:
+        return _one_person(table(), rows, near[0], distance)
     out = [NO_PROXIMITY]
     _tabulated(table(), [(0, rows, near)], distance, out)
     return out[0]
+
+
+def _one_person(table, rows: Sequence[Sequence[float]], k: int, distance: float) -> Proximity:
+    """The signal of one track near one person, read from the table's unrolled tracks.
+
+    :func:`_tabulated` for this one case (the usual one) with the same arithmetic, value for
+    value, in fewer array operations.
+    """
+    times, agent = _samples(rows)
+    fps, at = table.unrolled_frames[k]
+    times *= fps  # frames on the unrolled axis (the times are not needed after this)
+    times += at
+    gap = _interp_complex(times, table.unrolled_axis, table.unrolled)
+    gap -= agent
+    smallest = min(np.abs(gap, out=times).tolist())
+    if smallest <= distance:
+        return _new(Proximity, (True, (k,), smallest if smallest < NEAR_M else math.inf))
+    if smallest < NEAR_M:
+        return _new(Proximity, (False, (), smallest))
+    return NO_PROXIMITY
 
 
 class NearMemo:

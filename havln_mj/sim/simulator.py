@@ -379,7 +379,10 @@ class Simulator(SimulatorSettings, SimulatorExtensions, SimulatorReports):
         batch = self._batch
         if batch is None or not batch.elements:
             self._started("getState")  # raises
-        return [el.state for el in batch.elements]
+        elements = batch.elements
+        if len(elements) == 1:  # a batch of one (hot): no comprehension
+            return [elements[0].state]
+        return [el.state for el in elements]
 
     # Pythonic aliases; the MatterSim names above are the reference.
     new_episode = newEpisode

@@ -52,3 +52,30 @@ def test_leaving_out_people_out_of_view_changes_no_pixel(monkeypatch):
         np.testing.assert_array_equal(depth, depth0)
         np.testing.assert_array_equal(mask, mask0)
     np.testing.assert_array_equal(alphas, alphas_full)  # everyone is put back after a frame
+
+
+def test_a_person_half_in_view_keeps_only_the_pieces_that_may_show(monkeypatch):
+    halves = []
+    real = PeoplePoser.hide_unseen
+
+    def watching(self, data, camera, aspect):
+        out = real(self, data, camera, aspect)
+        shown = self.model.geom_rgba[self._geoms, 3] > 0
+        for k in set(self._owner.tolist()):
+            mine = shown[self._owner == k]
+            halves.append(bool(mine.any() and not mine.all()))
+        return out
+
+    monkeypatch.setattr(PeoplePoser, "hide_unseen", watching)
+    sim = MatterSim.Simulator(humans=True)
+    sim.setCameraResolution(64, 48)
+    sim.setSeed(3)
+    rng = np.random.default_rng(0)
+    for _ in range(3):
+        sim.newRandomEpisode(["proc-0"])
+        for _ in range(10):
+            state = sim.getState()[0]
+            k = int(rng.integers(len(state.navigableLocations)))
+            sim.makeAction([k], [float(rng.uniform(-2, 2))], [0.0])
+    sim.close()
+    assert sum(halves) > 3  # people partly in view drew only part of their pieces

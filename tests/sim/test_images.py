@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from havln_mj.sim.images import depth_to_mattersim, to_bgr
+from havln_mj.sim.frame import ViewSettings
+from havln_mj.sim.images import ImageFormat, depth_to_mattersim
 
 
 def test_depth_in_quarter_millimetres_reads_zero_out_of_range():
@@ -19,6 +20,9 @@ def test_depth_in_quarter_millimetres_reads_zero_out_of_range():
     np.testing.assert_array_equal(depth_to_mattersim(wide)[..., 0], expected.astype(np.uint16))
 
 
-def test_bgr_swaps_red_and_blue():
-    rgb = np.random.default_rng(1).integers(0, 256, (4, 5, 3), dtype=np.uint8)
-    np.testing.assert_array_equal(to_bgr(rgb), rgb[..., ::-1])
+def test_a_bgr_format_asks_the_renderer_for_bgr_colour():
+    settings = ViewSettings(64, 48, 1.0, depth=True)
+    assert ImageFormat("BGR", "mattersim").settings(settings) == ViewSettings(
+        64, 48, 1.0, depth=True, bgr=True
+    )
+    assert ImageFormat("RGB", "metres").settings(settings) is settings
