@@ -14,8 +14,9 @@
 * **Stairs**: climbing edges of a real building's graph proxy (``--stairs-scan``), walked both
   ways; with ``--stairs-flights`` the edges walked along a flight drawn for them.
 
-``--controller`` picks the gait (``trot`` or ``terrain``, see ``Go1Body``) for every part and
-``--v-max`` the primitives' cruise cap. Stairs and ramp courses: ``bench_go1_terrain.py``.
+``--controller`` picks the gait (``trot``, ``terrain`` or ``learned``, see ``Go1Body``) for
+every part and ``--v-max`` the primitives' cruise cap. Stairs and ramp courses:
+``bench_go1_terrain.py``.
 
 Prints one JSON object. Run: ``python benchmarks/bench_go1.py [--primitives N]``.
 """
@@ -337,7 +338,7 @@ def main() -> None:
     parser.add_argument("--house-seconds", type=float, default=60.0)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--parts", default="flat,push,odometry,speed,cruise,house,stairs")
-    parser.add_argument("--controller", default="trot", choices=("trot", "terrain"))
+    parser.add_argument("--controller", default="trot", choices=("trot", "terrain", "learned"))
     parser.add_argument("--v-max", type=float, default=None, help="forward cruise cap (m/s)")
     parser.add_argument(
         "--data",

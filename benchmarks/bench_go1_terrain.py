@@ -33,6 +33,7 @@ from common import machine
 
 from havln_mj.robot.go1 import Go1Body, Go1Gains, add_go1, load_gains
 from havln_mj.robot.go1.courses import START_X, ramp_spec, stairs_spec
+from havln_mj.robot.go1.learned import LearnedPolicy, load_policy
 
 STAIRS = (0.15, 0.17, 0.19)
 RAMPS = (10.0, 20.0, 30.0)
@@ -40,13 +41,20 @@ REACHED = 0.3  # metres from the target that count as arrived
 
 
 def _course(
-    kind: str, size: float, down: bool, walks: int, seed: int, controller: str, gains: Go1Gains
+    kind: str,
+    size: float,
+    down: bool,
+    walks: int,
+    seed: int,
+    controller: str,
+    gains: Go1Gains,
+    policy: LearnedPolicy | None,
 ) -> dict:
     spec, course = stairs_spec(riser=size) if kind == "stairs" else ramp_spec(size)
     add_go1(spec)
     model = spec.compile()
     data = mujoco.MjData(model)
-    robot = Go1Body(model, data, gains=gains, controller=controller)
+    robot = Go1Body(model, data, gains=gains, controller=controller, policy=policy)
     rng = np.random.default_rng(seed)
     start_x, goal_x = (course.top_x, START_X) if down else (START_X, course.top_x)
     start_z, goal_z = (course.rise, 0.0) if down else (0.0, course.rise)
@@ -95,7 +103,9 @@ def const_stand(floor: float) -> float:
     return floor + 0.27
 
 
-def _proxy_stairs(data: Path, edges: int, seed: int, controller: str) -> dict:
+def _proxy_stairs(
+    data: Path, edges: int, seed: int, controller: str, policy: LearnedPolicy | None
+) -> dict:
     """Stair edges on HA-R2R val_seen paths, walked both ways in the graph proxies."""
     from havln_mj.scene.scan import load_scan
     from havln_mj.sim.crowd import NO_CROWD
@@ -127,7 +137,7 @@ def _proxy_stairs(data: Path, edges: int, seed: int, controller: str) -> dict:
         g = scan.graph
         world = LeggedWorld(scan, WorldOptions(collision="boxes"), NO_CROWD, LeggedOptions())
         agent = LeggedAgent(world)
-        agent.body = Go1Body(world.model, agent.data, PREFIX, controller=controller)
+        agent.body = Go1Body(world.model, agent.data, PREFIX, controller=controller, policy=policy)
         for a, b in (e for s, e in todo if s == sid):
             for src, dst in ((a, b), (b, a)):
                 heading = float(rng.uniform(0, 2 * math.pi))
@@ -170,9 +180,12 @@ def main() -> None:
     parser.add_argument("--walks", type=int, default=100, help="walks per course")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--parts", default="courses,proxy")
-    parser.add_argument("--controller", default="terrain", choices=("terrain", "trot"))
+    parser.add_argument("--controller", default="terrain", choices=("terrain", "trot", "learned"))
     parser.add_argument("--proxy-edges", type=int, default=0, help="0: every stair edge")
     parser.add_argument("--gains", type=Path, default=None, help="gains.json to use")
+    parser.add_argument(
+        "--policy", type=Path, default=None, help="policy .npz of the learned controller"
+    )
     parser.add_argument(
         "--data",
         type=Path,
@@ -185,18 +198,21 @@ def main() -> None:
     args = parser.parse_args()
     parts = set(args.parts.split(","))
     gains = load_gains(args.gains)
+    policy = load_policy(args.policy) if args.controller == "learned" else None
     out: dict = {"machine": machine(), "controller": args.controller, "gains": str(args.gains)}
+    if policy is not None:
+        out["policy"] = str(args.policy or "shipped")
     t = time.perf_counter()
     if "courses" in parts:
         cells = [("stairs", r) for r in STAIRS] + [("ramp", a) for a in RAMPS]
         out["courses"] = [
-            _course(kind, size, down, args.walks, args.seed + k, args.controller, gains)
+            _course(kind, size, down, args.walks, args.seed + k, args.controller, gains, policy)
             for k, (kind, size) in enumerate(cells)
             for down in (False, True)
         ]
     if "proxy" in parts:
         out["proxy_stairs_val_seen"] = _proxy_stairs(
-            args.data, args.proxy_edges, args.seed, args.controller
+            args.data, args.proxy_edges, args.seed, args.controller, policy
         )
     out["wall_seconds"] = round(time.perf_counter() - t, 1)
     print(json.dumps(out, indent=1))

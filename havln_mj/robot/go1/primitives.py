@@ -25,6 +25,7 @@ from havln_mj.robot.go1.estimator import ESTIMATES, OdometryEstimator, TruthEsti
 from havln_mj.robot.go1.gains import Go1Gains, load_gains
 from havln_mj.robot.go1.gait import TrotGait
 from havln_mj.robot.go1.height_scan import HeightScan
+from havln_mj.robot.go1.learned import LearnedGait, LearnedPolicy, PolicySpec, load_policy
 from havln_mj.robot.go1.results import Go1Pose, PrimitiveResult
 from havln_mj.robot.go1.terrain_gait import TerrainGait
 
@@ -52,8 +53,13 @@ class Go1Body:
         gains: Controller gains (default: ``robots/go1/gains.json``).
         controller: ``"trot"`` (the blind trot, :mod:`~havln_mj.robot.go1.gait`) or
             ``"terrain"`` (the terrain-aware gait, :mod:`~havln_mj.robot.go1.terrain_gait`,
-            which reads the collision geometry through its ``scan``). With ``"terrain"``,
-            :meth:`reset` stands the robot on the ground as it is (a stair, a ramp).
+            which reads the collision geometry through its ``scan``), or ``"learned"`` (the
+            terrain gait with a learned residual policy, :mod:`~havln_mj.robot.go1.learned`).
+            With ``"terrain"`` and ``"learned"``, :meth:`reset` stands the robot on the ground
+            as it is (a stair, a ramp).
+        policy: The learned controller's policy (default: the shipped
+            ``robots/go1/policy.npz``), or only its :class:`PolicySpec` for a trainer that sets
+            the gait's residual itself; ignored by the other controllers.
     """
 
     def __init__(
@@ -64,6 +70,7 @@ class Go1Body:
         estimate: str = "truth",
         gains: Go1Gains | None = None,
         controller: str = "trot",
+        policy: LearnedPolicy | PolicySpec | None = None,
     ) -> None:
         if controller not in const.CONTROLLERS:
             raise InvalidArgumentError(
@@ -110,7 +117,8 @@ class Go1Body:
             )
         self._truth = TruthEstimator(model, data, self.qadr, self.dadr)
         self.controller = controller
-        self.terrain = controller == "terrain"
+        self.terrain = controller in ("terrain", "learned")
+        self.policy = policy if policy is not None or controller != "learned" else load_policy()
         self.scan = HeightScan(model, data, self.trunk_id)
         self.gait = self._new_gait()
         self.fallen = False
@@ -119,6 +127,20 @@ class Go1Body:
         self.est.reset()
 
     def _new_gait(self) -> TrotGait | TerrainGait:
+        if self.controller == "learned":
+            return LearnedGait(
+                self.gains.terrain,
+                self.data,
+                self.est,
+                self.joint_qadr,
+                self.joint_dadr,
+                self.foot_ids,
+                self.scan,
+                self.trunk_id,
+                self.dadr,
+                self.policy if isinstance(self.policy, LearnedPolicy) else None,
+                self.policy.spec if isinstance(self.policy, LearnedPolicy) else self.policy,
+            )
         if self.terrain:
             return TerrainGait(
                 self.gains.terrain,
