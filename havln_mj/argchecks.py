@@ -40,7 +40,8 @@ def add_go1_controller_flag(p: argparse.ArgumentParser) -> None:
         "--go1-controller",
         choices=CONTROLLERS,
         default="trot",
-        help="the GO1's gait: trot (blind, flat floors; default) or terrain (height scan)",
+        help="the GO1's gait: trot (blind, flat floors; default), terrain (height scan) or "
+        "learned (a trained policy over the terrain gait)",
     )
 
 

@@ -69,8 +69,9 @@ class LeggedOptions:
         turn_rad: Size of the continuous TURN actions.
         retry_m: A graph move ending farther than this from its viewpoint walks again.
         menagerie_xml: A user's Menagerie ``go1.xml`` to use instead of the built-in model.
-        controller: The gait: ``"trot"`` (blind, flat floors) or ``"terrain"`` (reads a
-            height scan; see :class:`~havln_mj.robot.go1.primitives.Go1Body`).
+        controller: The gait: ``"trot"`` (blind, flat floors), ``"terrain"`` (reads a
+            height scan) or ``"learned"`` (a trained policy's corrections to the terrain
+            gait); see :class:`~havln_mj.robot.go1.primitives.Go1Body`.
     """
 
     estimate: str = "truth"

@@ -28,7 +28,7 @@ class EnvConfig:
         ramp_share: Share of the robots that train on ramps (the others on stairs).
         turn_share: Share of episodes that turn in place instead of walking.
         speed: Range of commanded forward speed (m/s).
-        turn_rate: Range of |yaw rate| of turning episodes (rad/s).
+        turn_rate: Range of the absolute yaw rate of turning episodes (rad/s).
         max_init_level: Robots start at a random level up to this one.
     """
 

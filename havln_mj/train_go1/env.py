@@ -1,7 +1,7 @@
 """Many GO1s on the training courses, stepped one after another in one process.
 
 Each robot has its own ``MjData`` on the compiled course of its terrain level
-(:mod:`~havln_mj.train_go1.terrains`) and a :class:`~havln_mj.robot.go1.Go1Body` with the
+(:mod:`~havln_mj.train_go1.terrains`) and a :class:`~havln_mj.robot.go1.primitives.Go1Body` with the
 learned controller whose residual the trainer sets. A robot starts at the foot of the flight
 or on the landing, facing +x, and walks +x at a commanded speed with heading and lateral offset
 held (as the ``forward`` primitive does), or turns in place. An episode ends in a fall or after
@@ -160,8 +160,9 @@ class Go1Envs:
         """Applies one action per robot for one policy period.
 
         Returns:
-            Observations after the step (a robot that ended starts over: its first), rewards,
-            whether each episode ended, and whether it ended by time-out (not a fall).
+            ``(observations, rewards, dones, timeouts)``: observations after the step (a robot
+            that ended starts over: its first), rewards, whether each episode ended, and
+            whether it ended by time-out (not a fall).
         """
         n = self.num_envs
         rewards, dones, timeouts = np.zeros(n), np.zeros(n, bool), np.zeros(n, bool)

@@ -1,7 +1,7 @@
 """Training courses: a flight up, a landing, a flight down, on a flat floor, one per level.
 
 Every course climbs along +x from ``x = 0``: ``flight_risers`` risers up (the last onto the
-landing), a landing of :data:`LANDING` m, as many risers down, then the floor again. Level 0
+landing), a landing of ``LANDING`` m, as many risers down, then the floor again. Level 0
 is flat; stair level ``k`` has risers linear from ``risers[0]`` (level 1) to ``risers[1]``
 (the last level); ramp level ``k`` climbs at ``k / (levels - 1) × max_ramp_deg`` over the
 same run as the stairs of the middle tread. Each (kind, level, tread) is compiled once, with a

@@ -58,8 +58,9 @@ class Go1Body:
             With ``"terrain"`` and ``"learned"``, :meth:`reset` stands the robot on the ground
             as it is (a stair, a ramp).
         policy: The learned controller's policy (default: the shipped
-            ``robots/go1/policy.npz``), or only its :class:`PolicySpec` for a trainer that sets
-            the gait's residual itself; ignored by the other controllers.
+            ``robots/go1/policy.npz``), or only its
+            :class:`~havln_mj.robot.go1.learned.observation.PolicySpec` for a trainer that
+            sets the gait's residual itself; ignored by the other controllers.
     """
 
     def __init__(

@@ -9,8 +9,8 @@ residual is the terrain gait itself. While the gait stands (not walking) no resi
 A policy step is ``spec.decimation`` physics steps; the gait runs every
 ``control_decimation`` of them, so the policy acts on every ``decimation /
 control_decimation``-th gait tick and its action holds in between. :meth:`LearnedGait.step`
-does all of it; a trainer that batches many robots calls :meth:`reference`, :meth:`observe`
-and :meth:`targets` itself and sets :attr:`action`.
+does all of it; a trainer that batches many robots calls ``reference``, ``observe``
+and ``targets`` itself and sets ``action``.
 """
 
 from __future__ import annotations
@@ -28,7 +28,9 @@ from havln_mj.robot.go1.terrain_gait import TerrainGait
 
 
 class LearnedGait(TerrainGait):
-    """:class:`TerrainGait` plus a learned residual on its joint targets.
+    """The terrain gait plus a learned residual on its joint targets.
+
+    A :class:`~havln_mj.robot.go1.terrain_gait.TerrainGait` whose targets the policy corrects.
 
     Args:
         gains: The terrain gait's gains.
@@ -40,7 +42,7 @@ class LearnedGait(TerrainGait):
         scan: The height scan.
         trunk_id: The trunk body.
         dadr: dof address of the free joint.
-        policy: The policy; None when the caller sets :attr:`action` itself.
+        policy: The policy; None when the caller sets ``action`` itself.
         spec: The observation layout (default: the policy's).
     """
 
@@ -81,7 +83,10 @@ class LearnedGait(TerrainGait):
     def reference(
         self, dt: float, vx: float, vy: float, wz: float, ex: float = 0.0, ey: float = 0.0
     ) -> list[float]:
-        """Advances the terrain gait (:meth:`TerrainGait.step`) and returns its targets."""
+        """Advances the terrain gait and returns its targets.
+
+        See :meth:`~havln_mj.robot.go1.terrain_gait.TerrainGait.step`.
+        """
         self.command = (vx, vy, wz)
         return TerrainGait.step(self, dt, vx, vy, wz, ex, ey)
 

@@ -2,17 +2,17 @@
 
 The observation is one vector, in this order (trunk frame: x forward, y left, z up):
 
-====================  ====  =========================================================
-base angular velocity   3   rad/s, trunk frame
-projected gravity       3   the unit gravity vector in the trunk frame
-command                 3   commanded forward and leftward speed (m/s), yaw rate (rad/s)
-joint positions        12   minus the home pose (rad)
-joint velocities       12   rad/s
-last action            12   the policy's previous output
-gait reference         12   the terrain gait's joint targets minus the home pose (rad)
-gait phase              2   sin, cos of the gait cycle
-height scan           n·m   ground height minus trunk height (m) at ``scan_x × scan_y``
-====================  ====  =========================================================
+=====================  ====  =========================================================
+base angular velocity     3  rad/s, trunk frame
+projected gravity         3  the unit gravity vector in the trunk frame
+command                   3  commanded forward and leftward speed (m/s), yaw rate (rad/s)
+joint positions          12  minus the home pose (rad)
+joint velocities         12  rad/s
+last action              12  the policy's previous output
+gait reference           12  the terrain gait's joint targets minus the home pose (rad)
+gait phase                2  sin, cos of the gait cycle
+height scan             n·m  ground height minus trunk height (m) at ``scan_x × scan_y``
+=====================  ====  =========================================================
 
 The height scan is read through :class:`~havln_mj.robot.go1.height_scan.HeightScan` at points
 on a grid around the trunk that turns with its yaw (not its pitch or roll); a cell inside a

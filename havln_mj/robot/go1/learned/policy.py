@@ -2,7 +2,7 @@
 
 The file holds (``allow_pickle`` off, every entry a plain array):
 
-* ``format_version``: :data:`FORMAT_VERSION`;
+* ``format_version``: ``FORMAT_VERSION``;
 * ``spec``: the JSON of the :class:`~havln_mj.robot.go1.learned.observation.PolicySpec` the
   policy was trained with (observation layout, action scale, policy rate);
 * ``train_config``: the JSON of the training configuration (for the record);
