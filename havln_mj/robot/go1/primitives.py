@@ -128,30 +128,14 @@ class Go1Body:
         self.est.reset()
 
     def _new_gait(self) -> TrotGait | TerrainGait:
+        ground = (self.gains.terrain, self.data, self.est, self.joint_qadr, self.joint_dadr)
+        ground += (self.foot_ids, self.scan)
         if self.controller == "learned":
-            return LearnedGait(
-                self.gains.terrain,
-                self.data,
-                self.est,
-                self.joint_qadr,
-                self.joint_dadr,
-                self.foot_ids,
-                self.scan,
-                self.trunk_id,
-                self.dadr,
-                self.policy if isinstance(self.policy, LearnedPolicy) else None,
-                self.policy.spec if isinstance(self.policy, LearnedPolicy) else self.policy,
-            )
+            policy = self.policy if isinstance(self.policy, LearnedPolicy) else None
+            spec = self.policy.spec if policy is not None else self.policy
+            return LearnedGait(*ground, self.trunk_id, self.dadr, policy, spec)
         if self.terrain:
-            return TerrainGait(
-                self.gains.terrain,
-                self.data,
-                self.est,
-                self.joint_qadr,
-                self.joint_dadr,
-                self.foot_ids,
-                self.scan,
-            )
+            return TerrainGait(*ground)
         return TrotGait(self.gains)
 
     # ----------------------------------------------------------------- state
