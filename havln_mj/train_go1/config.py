@@ -7,10 +7,11 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from havln_mj.errors import InvalidArgumentError, MalformedDataError
+from havln_mj.robot.go1.gains import known_fields
 
 
 @dataclass(frozen=True)
@@ -161,13 +162,13 @@ def config_from_json(raw: dict, where: str = "config") -> TrainConfig:
     """
     if not isinstance(raw, dict):
         raise MalformedDataError(f"{where} must be a JSON object")
-    top = _known(raw, TrainConfig, where)
+    top = known_fields(raw, TrainConfig, where)
     try:
         for name, cls in _SECTIONS.items():
             section = top.get(name, {})
             if not isinstance(section, dict):
                 raise MalformedDataError(f"{where}: {name!r} must be a JSON object")
-            values = _known(section, cls, f"{where}: {name}")
+            values = known_fields(section, cls, f"{where}: {name}")
             top[name] = cls(
                 **{k: tuple(v) if isinstance(v, list) else v for k, v in values.items()}
             )
@@ -188,12 +189,3 @@ def load_config(path: str | Path | None) -> TrainConfig:
     except json.JSONDecodeError as err:
         raise MalformedDataError(f"{path} is not valid JSON: {err}") from err
     return config_from_json(raw, str(path))
-
-
-def _known(raw: dict, cls: type, where: str) -> dict:
-    names = {f.name for f in fields(cls)}
-    values = {k: v for k, v in raw.items() if not k.startswith("_")}
-    unknown = sorted(set(values) - names)
-    if unknown:
-        raise MalformedDataError(f"{where}: unknown keys {unknown}; valid: {sorted(names)}")
-    return values

@@ -15,9 +15,9 @@ from dataclasses import dataclass
 
 import mujoco
 
-from havln_mj import groups
 from havln_mj.robot.go1 import add_go1, flat_floor_spec
 from havln_mj.robot.go1.constants import TRUNK
+from havln_mj.robot.go1.courses import add_box, add_slab
 from havln_mj.robot.go1.height_scan import HeightScan
 from havln_mj.train_go1.config import EnvConfig
 
@@ -72,18 +72,18 @@ def course_spec(
         run = (n - 1) * tread
         if h > 0:
             for k in range(1, n):
-                _box(spec, f"up{k}", (k - 1) * tread, k * tread, k * h)
+                add_box(spec, f"up{k}", (k - 1) * tread, k * tread, WIDTH, k * h)
                 x0 = run + LANDING + (n - 1 - k) * tread
-                _box(spec, f"down{k}", x0, x0 + tread, k * h)
-            _box(spec, "landing", run, run + LANDING, n * h)
+                add_box(spec, f"down{k}", x0, x0 + tread, WIDTH, k * h)
+            add_box(spec, "landing", run, run + LANDING, WIDTH, n * h)
         return spec, run, n * h
     mid = sorted(cfg.treads)[len(cfg.treads) // 2]
     run = (n - 1) * mid
     a = math.radians(ramp_degrees(cfg, level))
     rise = run * math.tan(a)
-    _slab(spec, "ramp_up", 0.0, run, a)
-    _slab(spec, "ramp_down", 2 * run + LANDING, run, -a)
-    _box(spec, "landing", run, run + LANDING, rise)
+    add_slab(spec, "ramp_up", 0.0, run, a, WIDTH)
+    add_slab(spec, "ramp_down", 2 * run + LANDING, run, -a, WIDTH)
+    add_box(spec, "landing", run, run + LANDING, WIDTH, rise)
     return spec, run, rise
 
 
@@ -101,30 +101,3 @@ def build_courses(cfg: EnvConfig) -> dict[tuple[str, int, float], Course]:
                 scan = HeightScan(model, data, model.body("go1/" + TRUNK).id)
                 out[(kind, level, tread)] = Course(model, scan, run, rise)
     return out
-
-
-def _box(spec: mujoco.MjSpec, name: str, x0: float, x1: float, top: float) -> None:
-    spec.worldbody.add_geom(
-        name=name,
-        type=mujoco.mjtGeom.mjGEOM_BOX,
-        size=(0.5 * (x1 - x0), 0.5 * WIDTH, 0.5 * top),
-        pos=(0.5 * (x0 + x1), 0.0, 0.5 * top),
-        group=groups.COLLISION,
-    )
-
-
-def _slab(spec: mujoco.MjSpec, name: str, x_low: float, run: float, a: float) -> None:
-    """A slab whose top face rises by ``run·tan(a)`` over ``run`` from its end at ``x_low``."""
-    rise = run * math.tan(abs(a))
-    thick = 0.05
-    half = 0.5 * run / math.cos(a)
-    # Climbing (a > 0) it starts at the floor at x_low; descending it ends there.
-    cx = x_low + 0.5 * run if a > 0 else x_low - 0.5 * run
-    spec.worldbody.add_geom(
-        name=name,
-        type=mujoco.mjtGeom.mjGEOM_BOX,
-        size=(half, 0.5 * WIDTH, thick),
-        pos=(cx + thick * math.sin(a), 0.0, 0.5 * rise - thick * math.cos(a)),
-        quat=(math.cos(a / 2), 0.0, -math.sin(a / 2), 0.0),
-        group=groups.COLLISION,
-    )

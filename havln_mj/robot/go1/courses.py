@@ -60,8 +60,8 @@ def stairs_spec(
     spec = flat_floor_spec()
     run = (risers - 1) * tread
     for k in range(1, risers):
-        _box(spec, f"step{k}", (k - 1) * tread, k * tread, width, k * riser)
-    _box(spec, "landing", run, run + LANDING, width, risers * riser)
+        add_box(spec, f"step{k}", (k - 1) * tread, k * tread, width, k * riser)
+    add_box(spec, "landing", run, run + LANDING, width, risers * riser)
     return spec, Course("stairs", run, risers * riser, width)
 
 
@@ -77,27 +77,40 @@ def ramp_spec(
     spec = flat_floor_spec()
     a = math.radians(degrees)
     rise = run * math.tan(a)
-    half_len, thick = 0.5 * run / math.cos(a), 0.05
-    # The slab's top face runs from (0, 0) to (run, rise); its centre lies half a thickness below.
-    spec.worldbody.add_geom(
-        name="ramp",
-        type=mujoco.mjtGeom.mjGEOM_BOX,
-        size=(half_len, 0.5 * width, thick),
-        pos=(0.5 * run + thick * math.sin(a), 0.0, 0.5 * rise - thick * math.cos(a)),
-        quat=(math.cos(a / 2), 0.0, -math.sin(a / 2), 0.0),
-        group=groups.COLLISION,
-        rgba=_RGBA,
-    )
-    _box(spec, "landing", run, run + LANDING, width, rise)
+    add_slab(spec, "ramp", 0.0, run, a, width)
+    add_box(spec, "landing", run, run + LANDING, width, rise)
     return spec, Course("ramp", run, rise, width)
 
 
-def _box(spec: mujoco.MjSpec, name: str, x0: float, x1: float, width: float, top: float) -> None:
+def add_box(spec: mujoco.MjSpec, name: str, x0: float, x1: float, width: float, top: float) -> None:
+    """A collision block from the floor up to ``top``, over ``x0…x1``, centred across."""
     spec.worldbody.add_geom(
         name=name,
         type=mujoco.mjtGeom.mjGEOM_BOX,
         size=(0.5 * (x1 - x0), 0.5 * width, 0.5 * top),
         pos=(0.5 * (x0 + x1), 0.0, 0.5 * top),
+        group=groups.COLLISION,
+        rgba=_RGBA,
+    )
+
+
+def add_slab(
+    spec: mujoco.MjSpec, name: str, x_low: float, run: float, a: float, width: float
+) -> None:
+    """A ramp slab whose top face changes height by ``run·tan(a)`` over ``run``.
+
+    Climbing (``a > 0``) its top starts at the floor at ``x_low``; descending it ends there.
+    """
+    rise = run * math.tan(abs(a))
+    thick = 0.05
+    cx = x_low + 0.5 * run if a > 0 else x_low - 0.5 * run
+    # The top face's centre lies at (cx, rise / 2); the slab's centre half a thickness below.
+    spec.worldbody.add_geom(
+        name=name,
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=(0.5 * run / math.cos(a), 0.5 * width, thick),
+        pos=(cx + thick * math.sin(a), 0.0, 0.5 * rise - thick * math.cos(a)),
+        quat=(math.cos(a / 2), 0.0, -math.sin(a / 2), 0.0),
         group=groups.COLLISION,
         rgba=_RGBA,
     )

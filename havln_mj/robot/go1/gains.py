@@ -231,17 +231,22 @@ def load_gains(path: str | Path | None = None) -> Go1Gains:
         raise MalformedDataError(f"{path} is not valid JSON: {err}") from err
     if not isinstance(raw, dict):
         raise MalformedDataError(f"{path} must hold a JSON object of gains")
-    values = _known(raw, Go1Gains, path)
+    values = known_fields(raw, Go1Gains, path)
     terrain = values.pop("terrain", {})
     if not isinstance(terrain, dict):
         raise MalformedDataError(f"{path}: 'terrain' must be a JSON object of terrain gains")
-    return Go1Gains(**values, terrain=TerrainGains(**_known(terrain, TerrainGains, path)))
+    return Go1Gains(**values, terrain=TerrainGains(**known_fields(terrain, TerrainGains, path)))
 
 
-def _known(raw: dict, cls: type, path: Path) -> dict:
+def known_fields(raw: dict, cls: type, where: object) -> dict:
+    """``raw`` without its ``_`` comment keys, checked against the fields of dataclass ``cls``.
+
+    Raises:
+        MalformedDataError: A key is not a field (``where`` names the source).
+    """
     names = {f.name for f in fields(cls)}
     values = {k: v for k, v in raw.items() if not k.startswith("_")}
     unknown = sorted(set(values) - names)
     if unknown:
-        raise MalformedDataError(f"{path}: unknown gains {unknown}; valid: {sorted(names)}")
+        raise MalformedDataError(f"{where}: unknown keys {unknown}; valid: {sorted(names)}")
     return values

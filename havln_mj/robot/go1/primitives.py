@@ -131,9 +131,9 @@ class Go1Body:
         ground = (self.gains.terrain, self.data, self.est, self.joint_qadr, self.joint_dadr)
         ground += (self.foot_ids, self.scan)
         if self.controller == "learned":
-            policy = self.policy if isinstance(self.policy, LearnedPolicy) else None
-            spec = self.policy.spec if policy is not None else self.policy
-            return LearnedGait(*ground, self.trunk_id, self.dadr, policy, spec)
+            if isinstance(self.policy, LearnedPolicy):
+                return LearnedGait(*ground, self.trunk_id, self.dadr, self.policy)
+            return LearnedGait(*ground, self.trunk_id, self.dadr, None, self.policy)
         if self.terrain:
             return TerrainGait(*ground)
         return TrotGait(self.gains)
