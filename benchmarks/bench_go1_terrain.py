@@ -6,13 +6,19 @@
   offset ±0.1 m across and heading ±0.1 rad). A walk succeeds when the robot has not fallen
   and stands on the far landing within 0.3 m of the target. Reports success, falls,
   time-outs, time and the farthest it got (fraction of the flight's height).
+* **Floor seams**: ``--floor-primitives`` primitives (forward 0.5 m or turn ±45°) on a flat
+  plane and on a flat floor tiled with 10 cm strips of coplanar boxes (the narrowest floor
+  boxes the graph proxies draw). Reports falls and foot clamps: the 20 Hz ticks on which a
+  foot contact pushes more than 30 N within 60° of horizontal (a box's side face at a seam,
+  reached by a foot sunk into the floor), and the share of ticks with one.
 * **Proxy stairs**: the stair edges (floors more than 0.3 m apart) on the HA-R2R val_seen
   paths, in the graph proxies of their buildings, each walked both ways with
   ``LeggedAgent.go_to`` (through the edge's route when it has one). An edge counts when the
   robot ends within 0.3 m of the viewpoint's floor point, on its floor, without falling.
 
 Prints one JSON object. Run:
-``python benchmarks/bench_go1_terrain.py [--walks 100] [--parts courses,proxy] [--proxy-edges N]``.
+``python benchmarks/bench_go1_terrain.py [--walks 100] [--parts courses,seams,proxy]
+[--proxy-edges N] [--floor-primitives 1000]``.
 """
 
 from __future__ import annotations
@@ -32,8 +38,9 @@ import numpy as np
 from common import machine
 
 from havln_mj.robot.go1 import Go1Body, Go1Gains, add_go1, load_gains
-from havln_mj.robot.go1.courses import START_X, ramp_spec, stairs_spec
+from havln_mj.robot.go1.courses import START_X, add_box, ramp_spec, stairs_spec
 from havln_mj.robot.go1.learned import LearnedPolicy, load_policy
+from havln_mj.robot.go1.model import flat_floor_spec
 
 STAIRS = (0.15, 0.17, 0.19)
 RAMPS = (10.0, 20.0, 30.0)
@@ -95,6 +102,56 @@ def _course(
         "mean_progress": round(float(np.mean(progress)), 3),
         "mean_seconds": round(float(np.mean(seconds)), 1),
         "real_time_factor": round(steps * model.opt.timestep / max(wall, 1e-9), 1),
+    }
+
+
+def _floor_seams(kind: str, primitives: int, seed: int, controller: str, gains, policy) -> dict:
+    """Random primitives on a plane (``kind`` "plane") or on coplanar 10 cm box strips."""
+    spec = flat_floor_spec()
+    top = 0.0
+    if kind == "strips":
+        top = 0.1
+        for k in range(-50, 50):  # 10 m of strips along y, their tops at z = top
+            add_box(spec, f"strip{k}", 0.1 * k, 0.1 * (k + 1), 10.0, top)
+    add_go1(spec)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    robot = Go1Body(model, data, gains=gains, controller=controller, policy=policy)
+    feet = set(robot.foot_ids)
+    clamps = [0]
+    ticks = [0]
+
+    def tick(_t: float) -> None:
+        ticks[0] += 1
+        for k in range(data.ncon):
+            c = data.contact[k]
+            on_foot = (c.geom1 in feet or c.geom2 in feet) and c.efc_address >= 0
+            if on_foot and abs(c.frame[2]) < 0.5 and data.efc_force[c.efc_address] > 30.0:
+                clamps[0] += 1
+                return
+
+    rng = np.random.default_rng(seed)
+    robot.reset(0.0, 0.0, top, 0.0)
+    falls = 0
+    t = time.perf_counter()
+    for _ in range(primitives):
+        p = robot.true_pose()
+        if math.hypot(p.x, p.y) > 3.0:  # back to the middle of the floor
+            robot.reset(0.0, 0.0, top, float(rng.uniform(0, 2 * math.pi)))
+        if rng.random() < 0.5:
+            res = robot.forward(0.5, on_tick=tick)
+        else:
+            res = robot.turn(float(rng.choice((-1.0, 1.0))) * math.pi / 4, on_tick=tick)
+        if res.fell:
+            falls += 1
+            robot.reset(0.0, 0.0, top, float(rng.uniform(0, 2 * math.pi)))
+    return {
+        "floor": kind,
+        "primitives": primitives,
+        "falls": falls,
+        "foot_clamp_ticks": clamps[0],
+        "foot_clamp_share": round(clamps[0] / max(ticks[0], 1), 4),
+        "wall_seconds": round(time.perf_counter() - t, 1),
     }
 
 
@@ -179,7 +236,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--walks", type=int, default=100, help="walks per course")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--parts", default="courses,proxy")
+    parser.add_argument("--parts", default="courses,seams,proxy")
+    parser.add_argument("--floor-primitives", type=int, default=1000)
     parser.add_argument("--controller", default="terrain", choices=("terrain", "trot", "learned"))
     parser.add_argument("--proxy-edges", type=int, default=0, help="0: every stair edge")
     parser.add_argument("--gains", type=Path, default=None, help="gains.json to use")
@@ -209,6 +267,11 @@ def main() -> None:
             _course(kind, size, down, args.walks, args.seed + k, args.controller, gains, policy)
             for k, (kind, size) in enumerate(cells)
             for down in (False, True)
+        ]
+    if "seams" in parts:
+        out["floor_seams"] = [
+            _floor_seams(kind, args.floor_primitives, args.seed, args.controller, gains, policy)
+            for kind in ("plane", "strips")
         ]
     if "proxy" in parts:
         out["proxy_stairs_val_seen"] = _proxy_stairs(
