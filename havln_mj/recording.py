@@ -14,6 +14,8 @@ import json
 import math
 import os
 import shutil
+import signal
+import threading
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
@@ -37,18 +39,56 @@ _STAGING = ".havln-staging-"
 Walk = Callable[[object, str, Sequence[str]], list]
 
 
+class _CtrlC:
+    """Remembers a Ctrl-C (SIGINT) while installed.
+
+    It remembers one whose KeyboardInterrupt a library swallowed, too: rtree's loader catches
+    every exception while it loads its library.
+    """
+
+    def __init__(self) -> None:
+        self.seen = False
+        self._previous = None
+
+    def _handle(self, signum: int, frame: object) -> None:
+        self.seen = True
+        raise KeyboardInterrupt
+
+    def install(self) -> None:
+        """Takes over SIGINT, unless it is ignored or this is not the main thread."""
+        if threading.current_thread() is not threading.main_thread():
+            return
+        previous = signal.getsignal(signal.SIGINT)
+        if previous is not signal.SIG_IGN:
+            self._previous = previous
+            signal.signal(signal.SIGINT, self._handle)
+
+    def restore(self) -> None:
+        """Puts the earlier SIGINT handler back."""
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
+            self._previous = None
+
+
 class _Stage:
     """A staging folder whose files replace the run folder's outputs at :meth:`finish`."""
 
-    def __init__(self, out: Path) -> None:
+    def __init__(self, out: Path, ctrl_c: _CtrlC | None = None) -> None:
         self.out = out
         self.path = out / f"{_STAGING}{os.getpid()}"
+        self._ctrl_c = ctrl_c
 
     def __truediv__(self, name: str) -> Path:
         return self.path / name
 
     def finish(self, summary: dict) -> dict:
-        """Writes the summary (listing the run's files), then moves everything into place."""
+        """Writes the summary (listing the run's files), then moves everything into place.
+
+        Raises:
+            KeyboardInterrupt: Ctrl-C was pressed during the run: nothing is moved.
+        """
+        if self._ctrl_c is not None and self._ctrl_c.seen:
+            raise KeyboardInterrupt
         made = {k: n for k, n in OUTPUTS.items() if k != "summary" and (self.path / n).exists()}
         summary = {**summary, "files": {k: str(self.out / n) for k, n in made.items()}}
         (self.path / OUTPUTS["summary"]).write_text(json.dumps(summary, indent=1))
@@ -69,7 +109,9 @@ class _Stage:
 def staged_outputs(out: Path) -> Iterator[_Stage]:
     """A staging folder inside ``out``; removed if the run does not finish.
 
-    Staging folders of runs that were killed (their process is gone) are removed first.
+    Staging folders of runs that were killed (their process is gone) are removed first. A
+    Ctrl-C while the stage is open keeps the folder as it was, even if the KeyboardInterrupt
+    it raised was swallowed on the way: the stage's ``finish`` then raises it again.
 
     Raises:
         HavlnError: ``out`` cannot be created or written.
@@ -80,13 +122,16 @@ def staged_outputs(out: Path) -> Iterator[_Stage]:
             pid = old.name.removeprefix(_STAGING)
             if not pid.isdigit() or not pid_alive(int(pid)):
                 shutil.rmtree(old, ignore_errors=True)
-        stage = _Stage(out)
+        ctrl_c = _CtrlC()
+        stage = _Stage(out, ctrl_c)
         stage.path.mkdir()
     except OSError as exc:
         raise OutputError(f"cannot write the output folder {out}: {exc.strerror or exc}") from None
+    ctrl_c.install()
     try:
         yield stage
     finally:
+        ctrl_c.restore()
         shutil.rmtree(stage.path, ignore_errors=True)
 
 

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
+import signal
 import subprocess
 import sys
 
@@ -101,3 +103,23 @@ def test_a_rerun_replaces_the_whole_folder_and_an_interrupted_one_changes_nothin
     monkeypatch.setattr(recording.Recording, "write_map", interrupted)
     assert main([*base.split(), "--seed", "3"]) == 130
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+def test_a_ctrl_c_a_library_swallowed_still_leaves_the_folder_as_it_was(tmp_path, monkeypatch):
+    out = tmp_path / "run"
+    base = f"--scene proc-0 --episodes 1 --seed 0 --width 32 --height 24 --fps 2 --out {out}"
+    assert main(base.split()) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+
+    from havln_mj import recording
+
+    def swallowing(*args, **kwargs):
+        # As rtree's loader does with every exception while it loads its library.
+        with contextlib.suppress(KeyboardInterrupt):
+            signal.raise_signal(signal.SIGINT)
+
+    monkeypatch.setattr(recording.Recording, "write_map", swallowing)
+    handler = signal.getsignal(signal.SIGINT)
+    assert main([*base.split(), "--seed", "3"]) == 130
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert signal.getsignal(signal.SIGINT) is handler  # the run put the handler back
