@@ -73,7 +73,7 @@ class _CtrlC:
 class _Stage:
     """A staging folder whose files replace the run folder's outputs at :meth:`finish`."""
 
-    def __init__(self, out: Path, ctrl_c: _CtrlC | None = None) -> None:
+    def __init__(self, out: Path, ctrl_c: _CtrlC) -> None:
         self.out = out
         self.path = out / f"{_STAGING}{os.getpid()}"
         self._ctrl_c = ctrl_c
@@ -87,7 +87,7 @@ class _Stage:
         Raises:
             KeyboardInterrupt: Ctrl-C was pressed during the run: nothing is moved.
         """
-        if self._ctrl_c is not None and self._ctrl_c.seen:
+        if self._ctrl_c.seen:
             raise KeyboardInterrupt
         made = {k: n for k, n in OUTPUTS.items() if k != "summary" and (self.path / n).exists()}
         summary = {**summary, "files": {k: str(self.out / n) for k, n in made.items()}}
