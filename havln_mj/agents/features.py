@@ -106,7 +106,12 @@ class FeatureStore:
 
     def has_viewpoint(self, scan_id: str, viewpoint: str) -> bool:
         """Whether one viewpoint's features are cached."""
-        return self.path(scan_id).is_file() and viewpoint in self.scan(scan_id).rows
+        entry = self._scans.get(scan_id)  # asked at every step: no file system call if loaded
+        if entry is None:
+            if not self.path(scan_id).is_file():
+                return False
+            entry = self.scan(scan_id)
+        return viewpoint in entry.rows
 
     def put(self, scan_id: str, viewpoints: list[str], features: np.ndarray) -> None:
         """Stores the features ``(V, 36, S, D)`` of every viewpoint of a scan, atomically.

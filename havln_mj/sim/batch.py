@@ -197,7 +197,8 @@ class Batch:
         if not self._continuous and actions:
             shared = self._tick(self._clock.after_action)
         discretized, (lo, hi) = cfg.discretized, cfg.elevation_limits
-        elements, deferred = self.elements, None
+        along = self.rule.check == "action"
+        elements, deferred = self.elements, []
         for n, (i, k, dh, de) in enumerate(actions):
             el = elements[i]
             if shared is not None:
@@ -227,14 +228,12 @@ class Batch:
             )
             if not el.people:
                 self._settle(el, outcome, heading, elevation, index, NO_PROXIMITY)
-            elif self.rule.check != "action":
+            elif not along:
                 self._settle(el, outcome, heading, elevation, index, None)
             elif len(actions) == 1:  # one element moved (hot): its signal, then its state
                 threshold = self.rule.threshold
                 contact = knots_proximity(el.crowd, outcome[1], threshold, self._near)
                 self._settle(el, outcome, heading, elevation, index, contact)
-            elif deferred is None:
-                deferred = [(el, outcome, heading, elevation, index)]
             else:
                 deferred.append((el, outcome, heading, elevation, index))
         if deferred:
@@ -377,8 +376,7 @@ class Batch:
         if not cfg.rendering:
             return (*self.format.blank(cfg.width, cfg.height), None, None, None)
         t0 = time.perf_counter()
-        self._prepare_step()  # (the settings may have changed since the step began)
-        view = el.body.render(self._view, el.elevation, el.people_t)
+        view = el.body.render(self._view, el.elevation, el.people_t)  # (_prepare_step's)
         images = self.format.images(view)
         self.timers["render"] += time.perf_counter() - t0
         self.timers["frames"] += 1

@@ -122,6 +122,19 @@ class Proximity(NamedTuple):
 
 NO_PROXIMITY = Proximity(False, (), math.inf)
 
+_new = tuple.__new__  # a Proximity without its Python-level constructor (hot)
+
+
+def proximity_of(hit: tuple[int, ...], smallest: float) -> Proximity:
+    """The collision signal: the people ``hit`` and the smallest distance to anyone.
+
+    ``hit`` are the people within the collision distance; ``smallest`` is kept when under
+    :data:`NEAR_M`, else reported as ``inf``.
+    """
+    if not hit and smallest >= NEAR_M:
+        return NO_PROXIMITY
+    return _new(Proximity, (bool(hit), hit, smallest if smallest < NEAR_M else math.inf))
+
 
 # ---------------------------------------------------------------------- HA3D's distance
 
@@ -183,6 +196,4 @@ def state_proximity(
     if len(points) == 0:
         return NO_PROXIMITY
     d = np.linalg.norm(np.asarray(points, float) - np.asarray(camera, float), axis=1)
-    hit = tuple(int(k) for k in np.flatnonzero(d <= distance))
-    smallest = float(d.min())
-    return Proximity(bool(hit), hit, smallest if smallest < NEAR_M else math.inf)
+    return proximity_of(tuple(int(k) for k in np.flatnonzero(d <= distance)), float(d.min()))

@@ -27,7 +27,14 @@ from collections.abc import Sequence
 import numpy as np
 
 from havln_mj.humans.tracks import UNROLLED_S
-from havln_mj.sim.crowd import COLLISION_DISTANCE, NEAR_M, NO_PROXIMITY, Crowd, Proximity
+from havln_mj.sim.crowd import (
+    COLLISION_DISTANCE,
+    NEAR_M,
+    NO_PROXIMITY,
+    Crowd,
+    Proximity,
+    proximity_of,
+)
 
 SAMPLE_HZ = 16.0
 """The lowest rate, per simulated second, at which an action's track is checked for people."""
@@ -38,7 +45,6 @@ except ImportError:  # numpy < 2
     _interp_complex = np.interp
 
 _STEPS = np.arange(4096, dtype=float)  # sample indices, for sample times
-_new = tuple.__new__  # a Proximity without its Python-level constructor (hot)
 
 
 def _linspace(t0: float, t1: float, n: int, extra: Sequence[float] = ()) -> np.ndarray:
@@ -166,11 +172,7 @@ def _one_person(table, rows: Sequence[Sequence[float]], k: int, distance: float)
     gap = _interp_complex(times, table.unrolled_axis, table.unrolled)
     gap -= agent
     smallest = min(np.abs(gap, out=times).tolist())
-    if smallest <= distance:
-        return _new(Proximity, (True, (k,), smallest if smallest < NEAR_M else math.inf))
-    if smallest < NEAR_M:
-        return _new(Proximity, (False, (), smallest))
-    return NO_PROXIMITY
+    return proximity_of((k,) if smallest <= distance else (), smallest)
 
 
 class NearMemo:
@@ -321,11 +323,10 @@ def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> Non
     index = range(table.size) if who is None else who
     for (slot, _, _), row in zip(items, closest, strict=True):
         smallest = min(row)
+        hit = ()
         if smallest <= distance:
             hit = tuple([k for k, v in zip(index, row, strict=True) if v <= distance])
-            out[slot] = _new(Proximity, (True, hit, smallest if smallest < NEAR_M else math.inf))
-        elif smallest < NEAR_M:
-            out[slot] = _new(Proximity, (False, (), smallest))
+        out[slot] = proximity_of(hit, smallest)
 
 
 def track_proximity(
@@ -351,5 +352,4 @@ def track_proximity(
     d = np.hypot(track[..., 0] - positions[:, None, 0], track[..., 1] - positions[:, None, 1])
     closest = d.min(axis=0)
     hit = tuple(int(index[k]) for k in np.flatnonzero(closest <= distance))
-    smallest = float(closest.min())
-    return Proximity(bool(hit), hit, smallest if smallest < NEAR_M else math.inf)
+    return proximity_of(hit, float(closest.min()))
