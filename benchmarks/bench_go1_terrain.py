@@ -8,9 +8,10 @@
   time-outs, time and the farthest it got (fraction of the flight's height).
 * **Floor seams**: ``--floor-primitives`` primitives (forward 0.5 m or turn ±45°) on a flat
   plane and on a flat floor tiled with 10 cm strips of coplanar boxes (the narrowest floor
-  boxes the graph proxies draw). Reports falls and foot clamps: the 20 Hz ticks on which a
-  foot contact pushes more than 30 N within 60° of horizontal (a box's side face at a seam,
-  reached by a foot sunk into the floor), and the share of ticks with one.
+  boxes the graph proxies draw), meeting face to face ("strips") or overlapping by
+  ``SEAM_OVERLAP`` as the proxies' boxes do ("overlapping strips"). Reports falls and foot
+  side pushes: the 20 Hz ticks on which a foot contact pushes more than 30 N within 60° of
+  horizontal (a box's side face, reached by a foot sunk into the floor), and their share.
 * **Proxy stairs**: the stair edges (floors more than 0.3 m apart) on the HA-R2R val_seen
   paths, in the graph proxies of their buildings, each walked both ways with
   ``LeggedAgent.go_to`` (through the edge's route when it has one). An edge counts when the
@@ -41,6 +42,7 @@ from havln_mj.robot.go1 import Go1Body, Go1Gains, add_go1, load_gains
 from havln_mj.robot.go1.courses import START_X, add_box, ramp_spec, stairs_spec
 from havln_mj.robot.go1.learned import LearnedPolicy, load_policy
 from havln_mj.robot.go1.model import flat_floor_spec
+from havln_mj.scene.proxy.seams import SEAM_OVERLAP
 
 STAIRS = (0.15, 0.17, 0.19)
 RAMPS = (10.0, 20.0, 30.0)
@@ -109,16 +111,17 @@ def _floor_seams(kind: str, primitives: int, seed: int, controller: str, gains, 
     """Random primitives on a plane (``kind`` "plane") or on coplanar 10 cm box strips."""
     spec = flat_floor_spec()
     top = 0.0
-    if kind == "strips":
+    if kind != "plane":
         top = 0.1
+        lap = SEAM_OVERLAP if kind == "overlapping strips" else 0.0
         for k in range(-50, 50):  # 10 m of strips along y, their tops at z = top
-            add_box(spec, f"strip{k}", 0.1 * k, 0.1 * (k + 1), 10.0, top)
+            add_box(spec, f"strip{k}", 0.1 * k - lap, 0.1 * (k + 1) + lap, 10.0, top)
     add_go1(spec)
     model = spec.compile()
     data = mujoco.MjData(model)
     robot = Go1Body(model, data, gains=gains, controller=controller, policy=policy)
     feet = set(robot.foot_ids)
-    clamps = [0]
+    pushes = [0]
     ticks = [0]
 
     def tick(_t: float) -> None:
@@ -127,7 +130,7 @@ def _floor_seams(kind: str, primitives: int, seed: int, controller: str, gains, 
             c = data.contact[k]
             on_foot = (c.geom1 in feet or c.geom2 in feet) and c.efc_address >= 0
             if on_foot and abs(c.frame[2]) < 0.5 and data.efc_force[c.efc_address] > 30.0:
-                clamps[0] += 1
+                pushes[0] += 1
                 return
 
     rng = np.random.default_rng(seed)
@@ -149,8 +152,8 @@ def _floor_seams(kind: str, primitives: int, seed: int, controller: str, gains, 
         "floor": kind,
         "primitives": primitives,
         "falls": falls,
-        "foot_clamp_ticks": clamps[0],
-        "foot_clamp_share": round(clamps[0] / max(ticks[0], 1), 4),
+        "foot_side_push_ticks": pushes[0],
+        "foot_side_push_share": round(pushes[0] / max(ticks[0], 1), 4),
         "wall_seconds": round(time.perf_counter() - t, 1),
     }
 
@@ -271,7 +274,7 @@ def main() -> None:
     if "seams" in parts:
         out["floor_seams"] = [
             _floor_seams(kind, args.floor_primitives, args.seed, args.controller, gains, policy)
-            for kind in ("plane", "strips")
+            for kind in ("plane", "strips", "overlapping strips")
         ]
     if "proxy" in parts:
         out["proxy_stairs_val_seen"] = _proxy_stairs(

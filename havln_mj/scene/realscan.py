@@ -43,7 +43,7 @@ CONNECTIVITY_HOW_TO = (
     f"set {CONNECTIVITY_ENV}"
 )
 # Bump when proxies or converted scans change: cached ones are rebuilt.
-REAL_SCAN_VERSION = 6
+REAL_SCAN_VERSION = 7
 
 
 def resolve_connectivity_dir(arg: Path | str | None) -> Path | None:

@@ -25,6 +25,7 @@ from havln_mj.scene.proxy.routes import (
     shortest_routes,
     write_routes,
 )
+from havln_mj.scene.proxy.seams import SEAM_OVERLAP
 from havln_mj.scene.proxy.stairs import candidate_flights
 from havln_mj.scene.proxy.walk import CAUSES, edge_grade, path_fault, stair_steps
 
@@ -233,6 +234,52 @@ def test_a_stair_edge_is_drawn_with_treads_and_risers(rise, run, degrees):
     assert np.all(np.abs(treads - run / n) <= 1.5 * P.cell)
 
 
+def _seam_cells(proxy) -> int:
+    """How many cell edges over free floor lie where two floor boxes of one top meet face to
+    face."""
+    b = proxy.boxes.of_kind("floor")
+    lo, hi = b.lo, b.hi
+    grid, free = proxy.grid, np.any(proxy.free, axis=0)
+    same_top = np.abs(hi[:, None, 2] - hi[None, :, 2]) < 1e-6
+    count = 0
+    for axis in (0, 1):
+        across = 1 - axis
+        touch = np.abs(hi[:, None, axis] - lo[None, :, axis]) < 1e-6
+        start = np.maximum(lo[:, None, across], lo[None, :, across])
+        end = np.minimum(hi[:, None, across], hi[None, :, across])
+        origin = np.array([grid.x0, grid.y0])
+        for i, j in zip(*np.nonzero(touch & same_top & (end > start)), strict=True):
+            line = (hi[i, axis] - origin[axis]) / grid.cell
+            steps = np.arange(start[i, j], end[i, j] - 1e-9, grid.cell) + grid.cell / 2
+            along = ((steps - origin[across]) / grid.cell).astype(int)
+            for side in (np.floor(line - 0.5), np.floor(line + 0.5)):
+                beside = np.full_like(along, int(side))
+                rc = (along, beside) if axis == 0 else (beside, along)
+                inside = (rc[0] >= 0) & (rc[0] < free.shape[0]) & (rc[1] >= 0)
+                inside &= rc[1] < free.shape[1]
+                hit = np.zeros(len(along), bool)
+                hit[inside] = free[rc[0][inside], rc[1][inside]]
+                count += int(hit.sum())
+    return count
+
+
+def test_coplanar_floor_boxes_overlap_instead_of_meeting_face_to_face():
+    # An L of corridors and a stair: its flat floor takes several boxes of one top. Where two
+    # met face to face, a loaded foot was clamped between their side faces.
+    g = _graph({"a": (0, 0, 0), "b": (4, 0, 0), "c": (4, 3, 0), "d": (-3, 0, 0.6)},
+               [("a", "b"), ("b", "c"), ("a", "d")])  # fmt: skip
+    proxy = build_proxy(g)
+    floors = proxy.boxes.of_kind("floor")
+    assert len(floors) > 10 and proxy.unwalkable == []
+    assert _seam_cells(proxy) == 0
+    # Each box still ends on the cell grid or one overlap past it.
+    grid = proxy.grid
+    for ends, lap in ((floors.lo, -SEAM_OVERLAP), (floors.hi, SEAM_OVERLAP)):
+        cells = [(ends[:, :2] - s - (grid.x0, grid.y0)) / grid.cell for s in (0.0, lap)]
+        on_grid = [np.abs(c - np.round(c)) < 1e-6 for c in cells]
+        assert np.all(on_grid[0] | on_grid[1])
+
+
 def test_candidate_flights_join_the_ends_and_climb_gently_shortest_first():
     a, b = np.array([0.0, 0.0, 0.0]), np.array([0.3, 0.4, 2.0])  # 0.5 m apart, 2 m up
     flights = candidate_flights(a, b, P)
@@ -436,6 +483,14 @@ def test_floors_stand_under_every_viewpoint(proxies, scan):
         x, y, _ = graph.position(vp)
         under = (b.lo[:, 0] <= x) & (b.hi[:, 0] >= x) & (b.lo[:, 1] <= y) & (b.hi[:, 1] >= y)
         assert np.min(np.abs(b.hi[under, 2] - graph.floor_z(vp))) <= 0.1, vp
+
+
+@pytest.mark.parametrize("scan", SAMPLE)
+def test_few_coplanar_floor_boxes_meet_face_to_face(proxies, scan):
+    # What is left: seams where no box has room to reach over (a body walking a floor below
+    # or above within reach).
+    _, proxy = proxies[scan]
+    assert _seam_cells(proxy) <= 0.01 * np.count_nonzero(proxy.free)
 
 
 @pytest.mark.parametrize("scan", ["JF19kD82Mey", "PuKPg4mmafe", "2azQ1b91cZZ"])

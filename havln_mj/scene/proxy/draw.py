@@ -25,6 +25,7 @@ from havln_mj.scene.proxy.layers import (
 )
 from havln_mj.scene.proxy.params import ProxyParams
 from havln_mj.scene.proxy.raster import Grid, cover_cells, cover_rows, neighbours
+from havln_mj.scene.proxy.seams import LipRoom, overlap_seams
 
 FLOOR_RGBA = (0.62, 0.55, 0.45, 1.0)
 STAIR_RGBA = (0.50, 0.42, 0.34, 1.0)
@@ -57,12 +58,17 @@ def layer_boxes(layers: list[Layer], grid: Grid, p: ProxyParams, draft: bool = F
     Boxes may reach over a layer's walls and past them where no other layer walks near:
     nothing stands there, and boxes that run on there instead of tracing the ragged outlines
     of discs and corridors are fewer. Floor cells of one height share boxes; within a layer
-    no two floor boxes cover the same free cell (each would be one more contact to solve).
+    no two floor boxes cover the same free cell (each would be one more contact to solve),
+    except the strip where one reaches over a neighbour of its height
+    (:func:`~havln_mj.scene.proxy.seams.overlap_seams`).
     A ``draft`` covers each row's runs of cells instead: the same cells, quickly, in many more
     boxes, none past the cells it covers (for trying a drawing out, not for keeping).
     """
     sets: list[BoxSet] = []
     frees = [layer.free for layer in layers]
+    if not draft:
+        tops = np.stack([_top(layer.height) for layer in layers])
+        supports = np.where([layer.line for layer in layers], tops, np.nan)
     for k, layer in enumerate(layers):
         free, height = frees[k], layer.height
         others = np.zeros(free.shape, bool)
@@ -84,6 +90,10 @@ def layer_boxes(layers: list[Layer], grid: Grid, p: ProxyParams, draft: bool = F
         top = _top(np.nan_to_num(height))
         under = _underside(top, layers, p)
         lo, hi, rects = _cell_boxes(grid, free, under, top, spare, draft)
+        if not draft:
+            walls = np.where(wall, z0, np.nan), np.where(wall, z1, np.nan)
+            room = LipRoom(tops, supports, spare, *walls, p)
+            lo, hi = overlap_seams(lo, hi, rects, room)
         # A box is stairs where most of its cells are.
         stairs = _rect_sums(free & layer.stair, rects) * 2 > _rect_sums(free, rects)
         sets.append(_set(lo[~stairs], hi[~stairs], "floor", "floor", FLOOR_RGBA))
