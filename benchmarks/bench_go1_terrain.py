@@ -8,9 +8,9 @@
   time-outs, time and the farthest it got (fraction of the flight's height).
 * **Floor seams**: ``--floor-primitives`` primitives (forward 0.5 m or turn ±45°) on a flat
   plane and on a flat floor tiled with 10 cm strips of coplanar boxes (the narrowest floor
-  boxes the graph proxies draw), meeting face to face ("strips") or overlapping by
-  ``SEAM_OVERLAP`` as the proxies' boxes do ("overlapping strips"). Reports falls and foot
-  side pushes: the 20 Hz ticks on which a foot contact pushes more than 30 N within 60° of
+  boxes the graph proxies draw), meeting face to face ("strips") or each reaching
+  ``SEAM_OVERLAP`` over the next as the proxies' boxes do ("overlapping strips"). Reports falls
+  and foot side pushes: the 20 Hz ticks on which a foot contact pushes more than 30 N within 60° of
   horizontal (a box's side face, reached by a foot sunk into the floor), and their share.
 * **Proxy stairs**: the stair edges (floors more than 0.3 m apart) on the HA-R2R val_seen
   paths, in the graph proxies of their buildings, each walked both ways with
@@ -115,7 +115,7 @@ def _floor_seams(kind: str, primitives: int, seed: int, controller: str, gains, 
         top = 0.1
         lap = SEAM_OVERLAP if kind == "overlapping strips" else 0.0
         for k in range(-50, 50):  # 10 m of strips along y, their tops at z = top
-            add_box(spec, f"strip{k}", 0.1 * k - lap, 0.1 * (k + 1) + lap, 10.0, top)
+            add_box(spec, f"strip{k}", 0.1 * k, 0.1 * (k + 1) + lap, 10.0, top)
     add_go1(spec)
     model = spec.compile()
     data = mujoco.MjData(model)

@@ -250,7 +250,9 @@ def _seam_cells(proxy) -> int:
         origin = np.array([grid.x0, grid.y0])
         for i, j in zip(*np.nonzero(touch & same_top & (end > start)), strict=True):
             line = (hi[i, axis] - origin[axis]) / grid.cell
-            steps = np.arange(start[i, j], end[i, j] - 1e-9, grid.cell) + grid.cell / 2
+            # The middles of the cells along the line that both faces span (a lip's 1 cm sliver
+            # beside a side face spans none).
+            steps = np.arange(start[i, j] + grid.cell / 2, end[i, j], grid.cell)
             along = ((steps - origin[across]) / grid.cell).astype(int)
             for side in (np.floor(line - 0.5), np.floor(line + 0.5)):
                 beside = np.full_like(along, int(side))
@@ -278,6 +280,15 @@ def test_coplanar_floor_boxes_overlap_instead_of_meeting_face_to_face():
         cells = [(ends[:, :2] - s - (grid.x0, grid.y0)) / grid.cell for s in (0.0, lap)]
         on_grid = [np.abs(c - np.round(c)) < 1e-6 for c in cells]
         assert np.all(on_grid[0] | on_grid[1])
+    # Of two boxes that meet, one reaches over the other: no strip is covered twice over.
+    lo, hi = floors.lo, floors.hi
+    span = np.minimum(hi[:, None, :2], hi[None, :, :2]) - np.maximum(
+        lo[:, None, :2], lo[None, :, :2]
+    )
+    same_top = np.abs(hi[:, None, 2] - hi[None, :, 2]) < 1e-6
+    shared = np.all(span > 1e-9, axis=-1) & same_top & ~np.eye(len(lo), dtype=bool)
+    assert shared.any()
+    assert np.all(span[shared].min(axis=-1) <= SEAM_OVERLAP + 1e-9)
 
 
 def test_candidate_flights_join_the_ends_and_climb_gently_shortest_first():

@@ -69,6 +69,7 @@ def layer_boxes(layers: list[Layer], grid: Grid, p: ProxyParams, draft: bool = F
     if not draft:
         tops = np.stack([_top(layer.height) for layer in layers])
         supports = np.where([layer.line for layer in layers], tops, np.nan)
+        covered: dict = {}  # per floor top, the cell edges lips cover (see overlap_seams)
     for k, layer in enumerate(layers):
         free, height = frees[k], layer.height
         others = np.zeros(free.shape, bool)
@@ -93,7 +94,7 @@ def layer_boxes(layers: list[Layer], grid: Grid, p: ProxyParams, draft: bool = F
         if not draft:
             walls = np.where(wall, z0, np.nan), np.where(wall, z1, np.nan)
             room = LipRoom(tops, supports, spare, *walls, p)
-            lo, hi = overlap_seams(lo, hi, rects, room)
+            lo, hi = overlap_seams(lo, hi, rects, room, covered)
         # A box is stairs where most of its cells are.
         stairs = _rect_sums(free & layer.stair, rects) * 2 > _rect_sums(free, rects)
         sets.append(_set(lo[~stairs], hi[~stairs], "floor", "floor", FLOOR_RGBA))

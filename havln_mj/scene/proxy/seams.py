@@ -3,8 +3,8 @@
 A legged body's feet are soft spheres: a loaded foot sinks until its centre nears the floor's
 top. Where two coplanar boxes meet face to face, MuJoCo's sphere–box contact then takes the
 side face of each, and their two opposed pushes clamp the foot (with the friction on them, a
-swing cannot lift it): the body trips on a flat floor. A box that reaches ``SEAM_OVERLAP`` past
-the line puts its neighbour's face inside itself, where only an upward push is left.
+swing cannot lift it): the body trips on a flat floor. Where one box reaches ``SEAM_OVERLAP`` past
+the line, the two faces lie apart, inside the other box, and each pushes a foot one way only.
 """
 
 from __future__ import annotations
@@ -15,8 +15,9 @@ import numpy as np
 
 from havln_mj.scene.proxy.params import ProxyParams
 
-# metres: more than a loaded foot's centre sinks below the top
-SEAM_OVERLAP = 0.02
+# metres: keeps a loaded foot off the side face under it (bench_go1_terrain --parts seams), and
+# no more, as the strip covered twice stiffens the floor
+SEAM_OVERLAP = 0.01
 _EPS = 1e-6  # metres
 
 
@@ -36,10 +37,10 @@ class LipRoom:
     wall_z1: np.ndarray
     p: ProxyParams
 
-    def seam(self, cells: tuple[slice, slice], top: float) -> bool:
-        """Whether a floor of ``top`` (of any layer) is free in any of ``cells``."""
+    def seams(self, cells: tuple[slice, slice], top: float) -> np.ndarray:
+        """Per cell of a row or column of ``cells``: is a floor of ``top`` (any layer) free?"""
         with np.errstate(invalid="ignore"):
-            return bool(np.any(np.abs(self.tops[(slice(None), *cells)] - top) < _EPS))
+            return np.any(np.abs(self.tops[(slice(None), *cells)] - top) < _EPS, axis=0).ravel()
 
     def fits(self, cells: tuple[slice, slice], bottom: float, top: float) -> bool:
         """Whether a lip spanning ``bottom..top`` fits in every cell of ``cells``."""
@@ -62,29 +63,58 @@ class LipRoom:
 
 
 def overlap_seams(
-    lo: np.ndarray, hi: np.ndarray, rects: np.ndarray, room: LipRoom
+    lo: np.ndarray,
+    hi: np.ndarray,
+    rects: np.ndarray,
+    room: LipRoom,
+    covered: dict[float, tuple[np.ndarray, np.ndarray]],
 ) -> tuple[np.ndarray, np.ndarray]:
     """Floor boxes ``lo..hi`` on cell rectangles ``rects``, grown over their coplanar neighbours.
 
-    A side grows by ``SEAM_OVERLAP`` where it meets a floor of the same top (of any layer) and
-    the lip fits in every cell past it (see :class:`LipRoom`).
+    Of two boxes that meet, one reaches ``SEAM_OVERLAP`` over the other: where a foot stands
+    on both, their two contacts make the floor stiffer (the trot falls on a floor covered
+    twice), so the strip covered twice is kept to one overlap. A side grows where it meets a
+    floor of its top (of any layer), the lip fits in every cell past it (see
+    :class:`LipRoom`) and no lip covers that stretch yet; shorter sides first, so that of a
+    long side and the short ones across it, the short ones grow, and a side that would cover
+    a strip twice only once no other can.
 
     Args:
         lo: (N, 3) box corners.
         hi: (N, 3) box corners.
         rects: (N, 4) cell rectangles (row0, row1, col0, col1), end-exclusive.
         room: Where lips fit, and which floors they meet.
+        covered: Per floor top, the cell edges that lips cover: across x (rows, columns + 1),
+            between columns c - 1 and c; across y (rows + 1, columns). Shared by a drawing's
+            layers and updated here.
     """
     lo, hi = lo.copy(), hi.copy()
     h, w = room.spare.shape
+    # Per side: (length, box, axis, grows +, cells beyond it, the cell edges it lies on).
+    sides = []
     for i, (r0, r1, c0, c1) in enumerate(rects):
-        sides = (
-            (np.s_[r0:r1, c0 - 1 : c0], c0 > 0, lo, 0, -SEAM_OVERLAP),
-            (np.s_[r0:r1, c1 : c1 + 1], c1 < w, hi, 0, SEAM_OVERLAP),
-            (np.s_[r0 - 1 : r0, c0:c1], r0 > 0, lo, 1, -SEAM_OVERLAP),
-            (np.s_[r1 : r1 + 1, c0:c1], r1 < h, hi, 1, SEAM_OVERLAP),
-        )
-        for beyond, inside, end, axis, step in sides:
-            if inside and room.seam(beyond, hi[i, 2]) and room.fits(beyond, lo[i, 2], hi[i, 2]):
-                end[i, axis] += step
+        if c1 < w:
+            sides.append((r1 - r0, i, 0, True, np.s_[r0:r1, c1 : c1 + 1], np.s_[r0:r1, c1]))
+        if c0 > 0:
+            sides.append((r1 - r0, i, 0, False, np.s_[r0:r1, c0 - 1 : c0], np.s_[r0:r1, c0]))
+        if r1 < h:
+            sides.append((c1 - c0, i, 1, True, np.s_[r1 : r1 + 1, c0:c1], np.s_[r1, c0:c1]))
+        if r0 > 0:
+            sides.append((c1 - c0, i, 1, False, np.s_[r0 - 1 : r0, c0:c1], np.s_[r0, c0:c1]))
+    ordered = sorted(sides, key=lambda side: side[:2])
+    for twice in (False, True):  # a side that would cover a strip twice waits for the rest
+        for _, i, axis, grows, beyond, edges in ordered:
+            top = hi[i, 2]
+            mine = covered.setdefault(
+                round(top, 6), (np.zeros((h, w + 1), bool), np.zeros((h + 1, w), bool))
+            )
+            seams, lipped = room.seams(beyond, top), mine[axis][edges]
+            if not np.any(seams & ~lipped) or (np.any(seams & lipped) and not twice):
+                continue
+            if room.fits(beyond, lo[i, 2], top):
+                if grows:
+                    hi[i, axis] += SEAM_OVERLAP
+                else:
+                    lo[i, axis] -= SEAM_OVERLAP
+                mine[axis][edges] = True
     return lo, hi
