@@ -90,31 +90,32 @@ def overlap_seams(
     """
     lo, hi = lo.copy(), hi.copy()
     h, w = room.spare.shape
-    # Per side: (length, box, axis, grows +, cells beyond it, the cell edges it lies on).
+    keys = np.round(hi[:, 2], 6)
+    for key in np.unique(keys):
+        covered.setdefault(float(key), (np.zeros((h, w + 1), bool), np.zeros((h + 1, w), bool)))
+    # Per side that meets a floor of its top: (length, box, axis, grows +, cells beyond it,
+    # the cell edges it lies on, which of those are seams).
     sides = []
     for i, (r0, r1, c0, c1) in enumerate(rects):
-        if c1 < w:
-            sides.append((r1 - r0, i, 0, True, np.s_[r0:r1, c1 : c1 + 1], np.s_[r0:r1, c1]))
-        if c0 > 0:
-            sides.append((r1 - r0, i, 0, False, np.s_[r0:r1, c0 - 1 : c0], np.s_[r0:r1, c0]))
-        if r1 < h:
-            sides.append((c1 - c0, i, 1, True, np.s_[r1 : r1 + 1, c0:c1], np.s_[r1, c0:c1]))
-        if r0 > 0:
-            sides.append((c1 - c0, i, 1, False, np.s_[r0 - 1 : r0, c0:c1], np.s_[r0, c0:c1]))
-    ordered = sorted(sides, key=lambda side: side[:2])
+        for length, axis, grows, inside, beyond, edges in (
+            (r1 - r0, 0, True, c1 < w, np.s_[r0:r1, c1 : c1 + 1], np.s_[r0:r1, c1]),
+            (r1 - r0, 0, False, c0 > 0, np.s_[r0:r1, c0 - 1 : c0], np.s_[r0:r1, c0]),
+            (c1 - c0, 1, True, r1 < h, np.s_[r1 : r1 + 1, c0:c1], np.s_[r1, c0:c1]),
+            (c1 - c0, 1, False, r0 > 0, np.s_[r0 - 1 : r0, c0:c1], np.s_[r0, c0:c1]),
+        ):
+            seams = room.seams(beyond, hi[i, 2]) if inside else None
+            if seams is not None and seams.any():
+                sides.append((length, i, axis, grows, beyond, edges, seams))
+    sides.sort(key=lambda side: side[:2])
     for twice in (False, True):  # a side that would cover a strip twice waits for the rest
-        for _, i, axis, grows, beyond, edges in ordered:
-            top = hi[i, 2]
-            mine = covered.setdefault(
-                round(top, 6), (np.zeros((h, w + 1), bool), np.zeros((h + 1, w), bool))
-            )
-            seams, lipped = room.seams(beyond, top), mine[axis][edges]
+        for _, i, axis, grows, beyond, edges, seams in sides:
+            lipped = covered[float(keys[i])][axis][edges]
             if not np.any(seams & ~lipped) or (np.any(seams & lipped) and not twice):
                 continue
-            if room.fits(beyond, lo[i, 2], top):
+            if room.fits(beyond, lo[i, 2], hi[i, 2]):
                 if grows:
                     hi[i, axis] += SEAM_OVERLAP
                 else:
                     lo[i, axis] -= SEAM_OVERLAP
-                mine[axis][edges] = True
+                lipped[:] = True
     return lo, hi
