@@ -69,7 +69,8 @@ def layer_boxes(layers: list[Layer], grid: Grid, p: ProxyParams, draft: bool = F
     if not draft:
         tops = np.stack([_top(layer.height) for layer in layers])
         supports = np.where([layer.line for layer in layers], tops, np.nan)
-        covered: dict = {}  # per floor top, the cell edges lips cover (see overlap_seams)
+        # Per floor top, the cell edges lips cover (see overlap_seams).
+        covered: dict[float, tuple[np.ndarray, np.ndarray]] = {}
     for k, layer in enumerate(layers):
         free, height = frees[k], layer.height
         others = np.zeros(free.shape, bool)

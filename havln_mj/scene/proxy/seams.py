@@ -91,8 +91,9 @@ def overlap_seams(
     lo, hi = lo.copy(), hi.copy()
     h, w = room.spare.shape
     keys = np.round(hi[:, 2], 6)
-    for key in np.unique(keys):
-        covered.setdefault(float(key), (np.zeros((h, w + 1), bool), np.zeros((h + 1, w), bool)))
+    for key in map(float, np.unique(keys)):
+        if key not in covered:
+            covered[key] = (np.zeros((h, w + 1), bool), np.zeros((h + 1, w), bool))
     # Per side that meets a floor of its top: (length, box, axis, grows +, cells beyond it,
     # the cell edges it lies on, which of those are seams).
     sides = []
@@ -103,16 +104,19 @@ def overlap_seams(
             (c1 - c0, 1, True, r1 < h, np.s_[r1 : r1 + 1, c0:c1], np.s_[r1, c0:c1]),
             (c1 - c0, 1, False, r0 > 0, np.s_[r0 - 1 : r0, c0:c1], np.s_[r0, c0:c1]),
         ):
-            seams = room.seams(beyond, hi[i, 2]) if inside else None
-            if seams is not None and seams.any():
+            if inside and (seams := room.seams(beyond, hi[i, 2])).any():
                 sides.append((length, i, axis, grows, beyond, edges, seams))
     sides.sort(key=lambda side: side[:2])
-    for twice in (False, True):  # a side that would cover a strip twice waits for the rest
-        for _, i, axis, grows, beyond, edges, seams in sides:
+    waiting = []  # sides that would cover a strip twice: they wait for the rest
+    for twice in (False, True):
+        for side in waiting if twice else sides:
+            _, i, axis, grows, beyond, edges, seams = side
             lipped = covered[float(keys[i])][axis][edges]
-            if not np.any(seams & ~lipped) or (np.any(seams & lipped) and not twice):
+            if not np.any(seams & ~lipped):
                 continue
-            if room.fits(beyond, lo[i, 2], hi[i, 2]):
+            if not twice and np.any(seams & lipped):
+                waiting.append(side)
+            elif room.fits(beyond, lo[i, 2], hi[i, 2]):
                 if grows:
                     hi[i, axis] += SEAM_OVERLAP
                 else:
