@@ -1,11 +1,13 @@
 """The GO1 on stairs and ramps: test courses, and the stair edges of real buildings' proxies.
 
 * **Courses** (``havln_mj.robot.go1.courses``): straight stairs of 12 risers (0.15, 0.17,
-  0.19 m) on 0.28 m treads, and ramps of 10, 20 and 30° over a 2.5 m run, each walked up and
-  down as one ``forward`` primitive from 1 m before the flight to 1 m past it (random start
-  offset ±0.1 m across and heading ±0.1 rad). A walk succeeds when the robot has not fallen
-  and stands on the far landing within 0.3 m of the target. Reports success, falls,
-  time-outs, time and the farthest it got (fraction of the flight's height).
+  0.19 m) on 0.28 m treads, and ramps of 10, 20 and 30° over a 2.5 m run, 1 m wide, each
+  walked up and down from 1 m before the flight to 1 m past it (random start offset ±0.1 m
+  across and heading ±0.1 rad) as the simulator's graph actions walk: a ``turn`` to face the
+  target, then one ``forward`` primitive of the distance to it. A walk succeeds when the
+  robot has not fallen and stands on the far landing within 0.3 m of the target. Reports
+  success, falls, time-outs, time and the farthest it got (fraction of the flight's
+  height). ``--courses stairs`` or ``ramp`` walks one kind only.
 * **Floor seams**: ``--floor-primitives`` primitives (forward 0.5 m or turn ±45°) on a flat
   plane and on a flat floor tiled with 10 cm strips of coplanar boxes (the narrowest floor
   boxes the graph proxies draw), meeting face to face ("strips") or each reaching
@@ -38,6 +40,7 @@ import mujoco
 import numpy as np
 from common import machine
 
+from havln_mj.frames import wrap_angle
 from havln_mj.robot.go1 import Go1Body, Go1Gains, add_go1, load_gains
 from havln_mj.robot.go1.courses import START_X, add_box, ramp_spec, stairs_spec
 from havln_mj.robot.go1.learned import LearnedPolicy, load_policy
@@ -83,16 +86,19 @@ def _course(
             best[0] = max(best[0], climbed)
 
         t = time.perf_counter()
-        res = robot.forward(abs(goal_x - start_x), on_tick=track)
+        p = robot.true_pose()
+        aim = robot.turn(wrap_angle(math.atan2(goal_x - p.x, -p.y) - p.heading), on_tick=track)
+        p = robot.true_pose()
+        res = robot.forward(math.hypot(goal_x - p.x, p.y), on_tick=track)
         wall += time.perf_counter() - t
-        steps += res.steps
+        steps += aim.steps + res.steps
         p = robot.true_pose()
         arrived = abs(p.x - goal_x) < REACHED and abs(p.y) < course.width / 2
         arrived = arrived and abs(p.z - const_stand(goal_z)) < 0.15
         ok += arrived and not res.fell
         falls += res.fell
         timeouts += res.timed_out and not res.fell
-        seconds.append(res.duration)
+        seconds.append(aim.duration + res.duration)
         progress.append(min(1.0, best[0]))
     unit = "m" if kind == "stairs" else "deg"
     return {
@@ -240,6 +246,7 @@ def main() -> None:
     parser.add_argument("--walks", type=int, default=100, help="walks per course")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--parts", default="courses,seams,proxy")
+    parser.add_argument("--courses", default="stairs,ramp", help="course kinds to walk")
     parser.add_argument("--floor-primitives", type=int, default=1000)
     parser.add_argument("--controller", default="terrain", choices=("terrain", "trot", "learned"))
     parser.add_argument("--proxy-edges", type=int, default=0, help="0: every stair edge")
@@ -265,7 +272,9 @@ def main() -> None:
         out["policy"] = str(args.policy or "shipped")
     t = time.perf_counter()
     if "courses" in parts:
-        cells = [("stairs", r) for r in STAIRS] + [("ramp", a) for a in RAMPS]
+        kinds = set(args.courses.split(","))
+        cells = [("stairs", r) for r in STAIRS if "stairs" in kinds]
+        cells += [("ramp", a) for a in RAMPS if "ramp" in kinds]
         out["courses"] = [
             _course(kind, size, down, args.walks, args.seed + k, args.controller, gains, policy)
             for k, (kind, size) in enumerate(cells)

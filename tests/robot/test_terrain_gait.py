@@ -114,6 +114,25 @@ def test_terrain_gait_climbs_and_descends_a_10_degree_ramp() -> None:
     assert not res.fell and body.true_pose().x == pytest.approx(course.top_x - 0.5, abs=0.1)
 
 
+def test_terrain_gait_walks_up_and_down_a_30_degree_ramp_onto_its_landings() -> None:
+    # Without the stance feet following the ground, the feet slipped back down the slope and
+    # the robot stalled a third of the way up; the hind feet still on the slope at the crest
+    # tripped the flat rhythm. Down, it walks off the landing onto the slope and the floor.
+    spec, course = ramp_spec(30.0, run=1.5)
+    body = _on(spec)
+    body.reset(START_X, 0.0, 0.0, math.pi / 2)
+    res = body.forward(course.top_x - START_X)
+    p = body.true_pose()
+    assert not res.fell and not res.timed_out
+    assert p.x == pytest.approx(course.top_x, abs=0.1) and abs(p.y) < 0.15
+    assert p.z == pytest.approx(course.rise + 0.27, abs=0.05)
+    body.reset(course.top_x, 0.0, course.rise, -math.pi / 2)
+    res = body.forward(course.top_x - START_X)
+    p = body.true_pose()
+    assert not res.fell and not res.timed_out
+    assert p.x == pytest.approx(START_X, abs=0.1) and p.z == pytest.approx(0.27, abs=0.05)
+
+
 def test_placed_on_a_stair_it_stands_on_its_treads() -> None:
     spec, _ = stairs_spec(riser=0.17, tread=0.28, risers=12)
     body = _on(spec)

@@ -48,6 +48,10 @@ class TerrainGains:
         tread_max: Flat pieces shorter than this are stepped on in their middle (m).
         obstacle_rise: Ground this far above the line the feet stand on is an obstacle
             (furniture, a wall), not a step (m).
+        rough_hold: The rough rhythm holds until the trunk is this far past the last rough
+            ground it had near (m): the hind feet are then past it too.
+        stance_follow: Time constant with which a stance foot's reference follows the foot
+            along the heading and up, in the rough rhythm (s; 0: it stays where it landed).
         terrain_filter: Time constant of the trunk height and pitch references (s).
         ki_height: Integral gain on the trunk height error (1/s).
         ki_pitch: Integral gain on the pitch error (1/s).
@@ -82,6 +86,8 @@ class TerrainGains:
     foothold_shift: float = 0.16
     tread_max: float = 0.45
     obstacle_rise: float = 0.25
+    rough_hold: float = 0.45
+    stance_follow: float = 0.08
     terrain_filter: float = 0.1
     ki_height: float = 2.0
     ki_pitch: float = 2.0

@@ -87,6 +87,7 @@ class TerrainGait:
         self._iz = self._ip = self._ir = 0.0
         self._v = (0.0, 0.0)  # commanded velocity after the acceleration limit
         self._next_scan = -math.inf
+        self._rough_at = (math.inf, math.inf)  # where the trunk last had rough ground near
         self._ready = False
 
     # ------------------------------------------------------------- rhythm
@@ -154,6 +155,7 @@ class TerrainGait:
         self._iz = self._ip = self._ir = 0.0
         self._track.forget()
         self._next_scan = -math.inf
+        self._rough_at = (math.inf, math.inf)
         self._look()
         self._rough_mode = self.rough
 
@@ -181,7 +183,11 @@ class TerrainGait:
         e = self.est
         c, s = math.cos(e.yaw), math.sin(e.yaw)
         jump = self.g.edge_jump
-        self.rough = is_rough(self.ground, e.x, e.y, c, s, NEAR, jump)
+        if is_rough(self.ground, e.x, e.y, c, s, NEAR, jump):
+            self._rough_at = (e.x, e.y)
+        # Rough ground stays rough until the hind feet are past it too.
+        rx, ry = self._rough_at
+        self.rough = math.hypot(e.x - rx, e.y - ry) < self.g.rough_hold
         self.rough_ahead = self.rough or is_rough(self.ground, e.x, e.y, c, s, _FAR, jump)
 
     def _terrain_reference(self, dt: float) -> None:
@@ -266,7 +272,7 @@ class TerrainGait:
                 if q is not None:
                     out.extend(q)
                     continue
-            out.extend(self._stance_leg(leg, ref_pos, ref_rot, grf, dt))
+            out.extend(self._stance_leg(leg, ref_pos, ref_rot, grf, dt, pos, rot))
         return out
 
     def _limit(self, dt: float, vx: float, vy: float) -> tuple[float, float]:
@@ -343,11 +349,24 @@ class TerrainGait:
 
     # --------------------------------------------------------------- legs
 
-    def _stance_leg(self, leg: int, ref_pos, ref_rot, grf, dt: float):
+    def _stance_leg(self, leg: int, ref_pos, ref_rot, grf, dt: float, pos, rot):
+        if self._rough_mode and self.g.stance_follow > 0.0:
+            self._follow_foot(leg, pos, rot, min(1.0, dt / self.g.stance_follow))
         f = self.feet[leg]
         b = to_body(ref_rot, (f[0] - ref_pos[0], f[1] - ref_pos[1], f[2] - ref_pos[2]))
         hx, hy = const.HIP_OFFSETS[leg]
         return self._track(leg, leg_ik(leg, b[0] - hx, b[1] - hy, b[2]), dt, grf)
+
+    def _follow_foot(self, leg: int, pos, rot, a: float) -> None:
+        """Moves a stance foot's reference toward the foot, along the heading and up.
+
+        A loaded foot sinks and creeps downhill; legs held to where it landed push it along
+        the ground and, on a steep slope, slip it (a 30° ramp stalled at a third of the speed).
+        """
+        o, f = self.feet[leg], self._foot_world(leg, pos, rot)
+        c, s = math.cos(self.est.yaw), math.sin(self.est.yaw)
+        along = a * (c * (f[0] - o[0]) + s * (f[1] - o[1]))
+        self.feet[leg] = (o[0] + c * along, o[1] + s * along, o[2] + a * (f[2] - o[2]))
 
     def _lift_off(self, leg: int, pos, rot) -> None:
         self._lifted_at[leg] = self.data.time
