@@ -273,6 +273,8 @@ def main() -> None:
     t = time.perf_counter()
     if "courses" in parts:
         kinds = set(args.courses.split(","))
+        if not kinds <= {"stairs", "ramp"}:
+            parser.error(f"--courses {args.courses!r}: valid kinds are stairs and ramp")
         cells = [("stairs", r) for r in STAIRS if "stairs" in kinds]
         cells += [("ramp", a) for a in RAMPS if "ramp" in kinds]
         out["courses"] = [
