@@ -40,7 +40,7 @@ import mujoco
 import numpy as np
 from common import machine
 
-from havln_mj.frames import wrap_angle
+from havln_mj.frames import heading_to, wrap_angle
 from havln_mj.robot.go1 import Go1Body, Go1Gains, add_go1, load_gains
 from havln_mj.robot.go1.courses import START_X, add_box, ramp_spec, stairs_spec
 from havln_mj.robot.go1.learned import LearnedPolicy, load_policy
@@ -69,6 +69,7 @@ def _course(
     robot = Go1Body(model, data, gains=gains, controller=controller, policy=policy)
     rng = np.random.default_rng(seed)
     start_x, goal_x = (course.top_x, START_X) if down else (START_X, course.top_x)
+    goal = (goal_x, 0.0)
     start_z, goal_z = (course.rise, 0.0) if down else (0.0, course.rise)
     heading = -math.pi / 2 if down else math.pi / 2
     ok = falls = timeouts = 0
@@ -87,9 +88,10 @@ def _course(
 
         t = time.perf_counter()
         p = robot.true_pose()
-        aim = robot.turn(wrap_angle(math.atan2(goal_x - p.x, -p.y) - p.heading), on_tick=track)
+        bearing = heading_to((p.x, p.y), goal)
+        aim = robot.turn(wrap_angle(bearing - p.heading), on_tick=track)
         p = robot.true_pose()
-        res = robot.forward(math.hypot(goal_x - p.x, p.y), on_tick=track)
+        res = robot.forward(math.hypot(goal[0] - p.x, goal[1] - p.y), on_tick=track)
         wall += time.perf_counter() - t
         steps += aim.steps + res.steps
         p = robot.true_pose()

@@ -187,7 +187,7 @@ class TerrainGait:
             self._rough_at = (e.x, e.y)
         # Rough ground stays rough until the hind feet are past it too.
         rx, ry = self._rough_at
-        self.rough = math.hypot(e.x - rx, e.y - ry) < self.g.rough_hold
+        self.rough = math.hypot(e.x - rx, e.y - ry) <= self.g.rough_hold
         self.rough_ahead = self.rough or is_rough(self.ground, e.x, e.y, c, s, _FAR, jump)
 
     def _terrain_reference(self, dt: float) -> None:
@@ -259,6 +259,7 @@ class TerrainGait:
         load = _WEIGHT / (sum(1 for sw in self.swings if sw is None) or 1)
         grf = to_body(rot, (0.0, 0.0, load))
         twist = (vx, vy, wz, ex, ey)
+        follow = min(1.0, dt / g.stance_follow) if self._rough_mode and g.stance_follow else 0.0
         out: list[float] = []
         for leg in range(4):
             psi = self._leg_phase(leg)
@@ -272,7 +273,9 @@ class TerrainGait:
                 if q is not None:
                     out.extend(q)
                     continue
-            out.extend(self._stance_leg(leg, ref_pos, ref_rot, grf, dt, pos, rot))
+            if follow:
+                self._follow_foot(leg, pos, rot, follow)
+            out.extend(self._stance_leg(leg, ref_pos, ref_rot, grf, dt))
         return out
 
     def _limit(self, dt: float, vx: float, vy: float) -> tuple[float, float]:
@@ -349,9 +352,7 @@ class TerrainGait:
 
     # --------------------------------------------------------------- legs
 
-    def _stance_leg(self, leg: int, ref_pos, ref_rot, grf, dt: float, pos, rot):
-        if self._rough_mode and self.g.stance_follow > 0.0:
-            self._follow_foot(leg, pos, rot, min(1.0, dt / self.g.stance_follow))
+    def _stance_leg(self, leg: int, ref_pos, ref_rot, grf, dt: float):
         f = self.feet[leg]
         b = to_body(ref_rot, (f[0] - ref_pos[0], f[1] - ref_pos[1], f[2] - ref_pos[2]))
         hx, hy = const.HIP_OFFSETS[leg]
