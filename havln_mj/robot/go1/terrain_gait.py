@@ -260,6 +260,7 @@ class TerrainGait:
         grf = to_body(rot, (0.0, 0.0, load))
         twist = (vx, vy, wz, ex, ey)
         follow = min(1.0, dt / g.stance_follow) if self._rough_mode and g.stance_follow else 0.0
+        heading = (math.cos(e.yaw), math.sin(e.yaw)) if follow else (1.0, 0.0)
         out: list[float] = []
         for leg in range(4):
             psi = self._leg_phase(leg)
@@ -274,7 +275,7 @@ class TerrainGait:
                     out.extend(q)
                     continue
             if follow:
-                self._follow_foot(leg, pos, rot, follow)
+                self._follow_foot(leg, pos, rot, follow, heading)
             out.extend(self._stance_leg(leg, ref_pos, ref_rot, grf, dt))
         return out
 
@@ -358,14 +359,14 @@ class TerrainGait:
         hx, hy = const.HIP_OFFSETS[leg]
         return self._track(leg, leg_ik(leg, b[0] - hx, b[1] - hy, b[2]), dt, grf)
 
-    def _follow_foot(self, leg: int, pos, rot, a: float) -> None:
+    def _follow_foot(self, leg: int, pos, rot, a: float, heading: tuple[float, float]) -> None:
         """Moves a stance foot's reference toward the foot, along the heading and up.
 
         A loaded foot sinks and creeps downhill; legs held to where it landed push it along
         the ground and, on a steep slope, slip it (a 30° ramp stalled at a third of the speed).
         """
         o, f = self.feet[leg], self._foot_world(leg, pos, rot)
-        c, s = math.cos(self.est.yaw), math.sin(self.est.yaw)
+        c, s = heading
         along = a * (c * (f[0] - o[0]) + s * (f[1] - o[1]))
         self.feet[leg] = (o[0] + c * along, o[1] + s * along, o[2] + a * (f[2] - o[2]))
 
