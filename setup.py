@@ -3,14 +3,18 @@
 The built-in content lives in the top-level folders of the repository (``scenes/``,
 ``humans/``, ``robots/``, ``agents/``, ``assets/``, ``eval/``); a built wheel carries a copy
 of each under ``havln_mj/_data/``, where :mod:`havln_mj.paths` finds it through
-``importlib.resources``. An editable install reads them in place. Everything else is in
-``pyproject.toml``.
+``importlib.resources``. An editable install reads them in place.
+
+The collision signal's inner loop is also built as a C extension (``havln_mj.sim._closest``)
+where a C compiler is at hand; without one the build goes on and the package uses its numpy
+path, which gives the same numbers. Everything else is in ``pyproject.toml``.
 """
 
 import shutil
 from pathlib import Path
 
-from setuptools import setup
+from setuptools import Extension, setup
+from setuptools.command.build_ext import build_ext
 from setuptools.command.build_py import build_py
 
 CONTENT = ("scenes", "humans", "robots", "agents", "assets", "eval")
@@ -32,4 +36,20 @@ class BuildWithContent(build_py):
                 shutil.copytree(root / name, target / name, ignore=_SKIP, dirs_exist_ok=True)
 
 
-setup(cmdclass={"build_py": BuildWithContent})
+class BuildExact(build_ext):
+    """``build_ext`` that keeps floating-point operations unfused (as numpy rounds them)."""
+
+    def build_extensions(self) -> None:
+        """Builds the extensions, with ``-ffp-contract=off`` on GCC-like compilers."""
+        if self.compiler.compiler_type == "unix":
+            for ext in self.extensions:
+                ext.extra_compile_args = [*ext.extra_compile_args, "-O2", "-ffp-contract=off"]
+        super().build_extensions()
+
+
+setup(
+    cmdclass={"build_py": BuildWithContent, "build_ext": BuildExact},
+    ext_modules=[
+        Extension("havln_mj.sim._closest", ["havln_mj/sim/_closest.c"], optional=True),
+    ],
+)

@@ -13,7 +13,9 @@ plan walked once untimed first, which also records the viewpoints visited), for 
 of timed stepping (``newEpisode`` untimed); the sides alternate for ``--rounds`` rounds and the
 medians are compared. ``cpu_ratio`` compares steps per CPU second of the stepping loop, which
 holds steadier than wall time on a shared machine. ``same_path`` says whether both sides
-visited the same viewpoints on the plan's first pass.
+visited the same viewpoints on the plan's first pass. ``compiled_signal`` says whether ours
+ran the collision signal's compiled loop (``havln_mj.sim._closest``, built at install where a C
+compiler was at hand) or its numpy path.
 
 Workloads (rendering off; camera 640×480, vfov 60°, continuous headings, restricted
 navigation, identical on both sides):
@@ -211,6 +213,11 @@ def worker(args: argparse.Namespace) -> None:
     for e in range(PLAN_EPISODES):  # untimed pass: loads everything, records the path
         _episode(sim, plan, e, zeros, visited)
     setup = time.perf_counter() - t0
+    extra = {}
+    if args.worker == "ours":
+        from havln_mj.sim import proximity
+
+        extra["compiled_signal"] = proximity._closest is not None
     steps, wall, cpu, e = 0, 0.0, 0.0, 0
     while wall < args.seconds:
         w, c = _episode(sim, plan, e % PLAN_EPISODES, zeros, None)
@@ -226,6 +233,7 @@ def worker(args: argparse.Namespace) -> None:
                 "rss_mb": int(Path("/proc/self/statm").read_text().split()[1])
                 * os.sysconf("SC_PAGE_SIZE")
                 / 2**20,
+                **extra,
             }
         )
     )
@@ -278,6 +286,8 @@ def run_workload(name: str, args, tmp: Path, peer: Path | None) -> dict:
             "setup_s": round(statistics.median(r["setup_s"] for r in rows), 2),
             "rss_mb": round(max(r["rss_mb"] for r in rows), 1),
         }
+        if "compiled_signal" in rows[0]:  # ours: the collision signal's compiled loop ran
+            out[side]["compiled_signal"] = rows[0]["compiled_signal"]
     crcs = {side: rows[0]["path_crc"] for side, rows in runs.items()}
     out["same_path"] = len(set(crcs.values())) == 1
     ratios = {}

@@ -78,13 +78,14 @@ class PelvisTable:
         self.axis = np.arange(len(self.values), dtype=float)
         fps = np.asarray(fps, float)
         start_f = np.asarray(start, float) * fps
-        self.unrolled_axis, self.unrolled, unrolled_base = _unroll(
+        self.unrolled_axis, self.unrolled, unrolled_base, first = _unroll(
             values, last, loop, period, start_f + fps * UNROLLED_S
         )
         self._person = (fps, start_f, period, loop, last, base, start_f + unrolled_base)
-        # Each person's (fps, where simulated time 0 is on the unrolled axis), as floats.
+        # Each person's (fps, where simulated time 0 is on the unrolled axis, the index of
+        # their first position there), as Python numbers.
         zero_at = (start_f + unrolled_base).tolist()
-        self.unrolled_frames = list(zip(fps.tolist(), zero_at, strict=True))
+        self.unrolled_frames = list(zip(fps.tolist(), zero_at, first, strict=True))
         self._everyone = _Columns(*self._person)
         self._subsets: dict[tuple[int, ...], _Columns] = {}
 
@@ -168,15 +169,16 @@ def _unroll(
     loop: np.ndarray,
     period: np.ndarray,
     until: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[int]]:
     """Each person's frames played up to frame ``until[k]``, loops unrolled, on one axis.
 
     Returns:
-        ``(axis, values, base)``: increasing axis positions, the ``x + iy`` there, and where
-        each person's frame 0 is on the axis (people one position apart).
+        ``(axis, values, base, first)``: non-decreasing axis positions (a step of 1, or 0
+        where a loop wraps), the ``x + iy`` there, where each person's frame 0 is on the axis
+        (people one position apart), and the index of each person's first position.
     """
-    axes, out, base = [], [], np.zeros(len(values))
-    offset = 0.0
+    axes, out, base, first = [], [], np.zeros(len(values)), []
+    offset, index = 0.0, 0
     for k, frames in enumerate(values):
         lk, ok, pk = int(last[k]), int(loop[k]), int(period[k])
         cycles = max(0, math.ceil((until[k] - lk) / pk)) + 1  # one more: rounding
@@ -188,8 +190,10 @@ def _unroll(
         )
         out += [frames[: lk + 1], np.tile(frames[ok : ok + pk + 1], cycles)]
         base[k] = offset
+        first.append(index)
         axes.append(axis + offset)
         offset += axis[-1] + 1.0
+        index += len(axis)
     if not axes:
-        return np.zeros(0), np.zeros(0, complex), base
-    return np.concatenate(axes), np.concatenate(out), base
+        return np.zeros(0), np.zeros(0, complex), base, first
+    return np.concatenate(axes), np.concatenate(out), base, first

@@ -14,8 +14,9 @@ The signal runs on every action, so it is computed as a lookup: a crowd that off
 ``pelvis_table()`` (the humans package's does, see :mod:`havln_mj.humans.tracks`) has its
 people's pelvis tracks tabulated once and read at all of an action's samples, for all people
 and all of a batch's tracks among them, in one vectorised pass; who is near a straight track
-is remembered (:class:`NearMemo`). Other crowds are asked for
-:meth:`~havln_mj.sim.crowd.Crowd.positions`.
+is remembered (:class:`NearMemo`). Where the package was installed with a C compiler at hand,
+the table is read by a compiled loop (``havln_mj.sim._closest``) with the same arithmetic;
+otherwise by numpy. Other crowds are asked for :meth:`~havln_mj.sim.crowd.Crowd.positions`.
 """
 
 from __future__ import annotations
@@ -43,6 +44,11 @@ try:  # numpy's compiled interpolation, without np.interp's argument handling
     from numpy._core.multiarray import interp_complex as _interp_complex
 except ImportError:  # numpy < 2
     _interp_complex = np.interp
+
+try:  # the table read compiled (built where a C compiler was at hand): the same numbers
+    from havln_mj.sim._closest import closest as _closest
+except ImportError:
+    _closest = None
 
 _STEPS = np.arange(4096, dtype=float)  # sample indices, for sample times
 
@@ -152,8 +158,15 @@ def knots_proximity(
     if table is None:
         times, positions = sample_knots(np.asarray(rows, float).reshape(-1, 4))
         return track_proximity(crowd, times, positions, distance, near)
-    if len(near) == 1 and rows[-1][0] <= UNROLLED_S:
-        return _one_person(table(), rows, near[0], distance)
+    if rows[-1][0] <= UNROLLED_S:
+        if _closest is not None:
+            t = table()
+            smallest, hit = _closest(
+                rows, near, t.unrolled_frames, t.unrolled_axis, t.unrolled, distance
+            )
+            return proximity_of(hit, smallest)
+        if len(near) == 1:
+            return _one_person(table(), rows, near[0], distance)
     out = [NO_PROXIMITY]
     _tabulated(table(), [(0, rows, near)], distance, out)
     return out[0]
@@ -166,7 +179,7 @@ def _one_person(table, rows: Sequence[Sequence[float]], k: int, distance: float)
     value, in fewer array operations.
     """
     times, agent = _samples(rows)
-    fps, at = table.unrolled_frames[k]
+    fps, at, _ = table.unrolled_frames[k]
     times *= fps  # frames on the unrolled axis (the times are not needed after this)
     times += at
     gap = _interp_complex(times, table.unrolled_axis, table.unrolled)
@@ -299,6 +312,12 @@ def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> Non
     pruning left out of a track are farther than :data:`~havln_mj.sim.crowd.NEAR_M` from it,
     so measuring them changes neither its flags nor its reported distance.
     """
+    if _closest is not None and all(rows[-1][0] <= UNROLLED_S for _, rows, _ in items):
+        frames, axis, values = table.unrolled_frames, table.unrolled_axis, table.unrolled
+        for slot, rows, people in items:
+            smallest, hit = _closest(rows, people, frames, axis, values, distance)
+            out[slot] = proximity_of(hit, smallest)
+        return
     if len(items) == 1:
         _, rows, people = items[0]
         times, agent = _samples(rows)

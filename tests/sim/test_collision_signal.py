@@ -11,6 +11,7 @@ from havln_mj.humans.clip import Clip
 from havln_mj.humans.crowd import Crowd, Person
 from havln_mj.humans.population import populate
 from havln_mj.scene.scan import load_scan
+from havln_mj.sim import proximity
 from havln_mj.sim.crowd import NEAR_M, Proximity
 from havln_mj.sim.proximity import (
     SAMPLE_HZ,
@@ -137,3 +138,41 @@ def test_the_tabulated_signal_matches_the_direct_one_on_10000_actions():
         crushed += slow.crushed
     # The comparison covers many passes near people, collisions included, and far ones.
     assert crushed > 1000 and 3000 < finite < 9000
+
+
+def _robot_track(graph, rng):
+    """A robot's trunk track: a wandering walk of many knots, some ticks standing still."""
+    a = graph.position(graph.nodes[int(rng.integers(len(graph.nodes)))])
+    t = float(rng.uniform(0.0, 300.0))
+    steps = rng.normal(0.0, 0.05, (int(rng.integers(2, 400)), 3)) * [1.0, 1.0, 0.0]
+    steps[rng.random(len(steps)) < 0.1] = 0.0
+    xyz = a + np.cumsum(steps, axis=0)
+    times = t + np.cumsum(rng.choice([0.0, 0.02, 0.1], len(steps)))
+    return np.column_stack([times, xyz]).tolist()
+
+
+@pytest.mark.skipif(proximity._closest is None, reason="the C extension is not built here")
+def test_the_compiled_table_read_agrees_with_the_numpy_path(monkeypatch):
+    graph, crowd = _people_of_every_kind()
+    rng = np.random.default_rng(1)
+    actions = [_random_action(graph, rng) for _ in range(10_000)]
+    actions += [_robot_track(graph, rng) for _ in range(300)]
+    memo = NearMemo()
+
+    def signals():
+        single = [knots_proximity(crowd, a, 1.0, memo) for a in actions]
+        batched = []
+        for k in range(0, len(actions), 8):
+            batched += batch_proximity([(crowd, a) for a in actions[k : k + 8]], 1.0, memo)
+        return single, batched
+
+    compiled = signals()
+    monkeypatch.setattr(proximity, "_closest", None)
+    for fast, slow in zip(compiled, signals(), strict=True):
+        # Flags bit for bit; distances to rounding (numpy's |x + iy| is not C's hypot).
+        assert [(p.crushed, p.people) for p in fast] == [(p.crushed, p.people) for p in slow]
+        a = np.array([p.min_distance for p in fast])
+        b = np.array([p.min_distance for p in slow])
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=0.0)
+    hits = sum(p.crushed for p in compiled[0])
+    assert hits > 1000 and np.isfinite([p.min_distance for p in compiled[0]]).sum() > 3000
