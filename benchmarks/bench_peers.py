@@ -217,7 +217,7 @@ def worker(args: argparse.Namespace) -> None:
     if args.worker == "ours":
         from havln_mj.sim import proximity
 
-        extra["compiled_signal"] = proximity._closest is not None
+        extra["compiled_signal"] = getattr(proximity, "_closest", None) is not None
     steps, wall, cpu, e = 0, 0.0, 0.0, 0
     while wall < args.seconds:
         w, c = _episode(sim, plan, e % PLAN_EPISODES, zeros, None)
