@@ -157,6 +157,10 @@ def test_the_compiled_table_read_agrees_with_the_numpy_path(monkeypatch):
     rng = np.random.default_rng(1)
     actions = [_random_action(graph, rng) for _ in range(10_000)]
     actions += [_robot_track(graph, rng) for _ in range(300)]
+    # Long waits (a near miss, a hit): more samples than the numpy path keeps precomputed.
+    for node in graph.nodes[1:3]:
+        here = graph.position(node)
+        actions += [((t0, *here), (t0 + 290.0, *here)) for t0 in (0.5, 10.25)]
     memo = NearMemo()
 
     def signals():
