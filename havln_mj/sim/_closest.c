@@ -13,11 +13,13 @@
  *
  * Returns the smallest horizontal distance from any of the people to the track over its
  * samples, and the people (a tuple, in the order given) that come within distance. The
- * samples and every value are computed with the arithmetic of the numpy path in
- * havln_mj/sim/proximity.py (_samples, then the table read), operation for operation, so
- * that both give the same numbers: evenly spaced times i * step + t0 at SAMPLE_HZ, the inner
- * knots' times after them, numpy.interp's rule for linear interpolation, hypot for |gap|.
- * Build with -ffp-contract=off: a fused multiply-add would round differently.
+ * samples and positions are computed with the arithmetic of the numpy path in
+ * havln_mj/sim/proximity.py (_samples, then the table read), operation for operation:
+ * evenly spaced times i * step + t0 at SAMPLE_HZ, the inner knots' times after them,
+ * numpy.interp's rule for linear interpolation. Only |gap| is taken differently (the square
+ * root of the smallest squared distance, where numpy takes each |x + iy|), so distances
+ * agree to rounding and the flags agree. Build with -ffp-contract=off: a fused multiply-add
+ * would round differently.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
