@@ -130,7 +130,7 @@ static int row_item(PyObject *row, Py_ssize_t i, double *out)
     return (*out == -1.0 && PyErr_Occurred()) ? -1 : 0;
 }
 
-/* The track's knots as three arrays t, x, y (one allocation of 3 * knots doubles). */
+/* The track's knots as their times t[n] then their x + iy as pairs (3 * n doubles). */
 static double *read_knots(PyObject *rows, Py_ssize_t *count)
 {
     PyObject *seq = PySequence_Fast(rows, "rows must be a sequence of knots");
@@ -152,8 +152,8 @@ static double *read_knots(PyObject *rows, Py_ssize_t *count)
     }
     for (i = 0; i < n; ++i) {
         PyObject *row = PySequence_Fast_GET_ITEM(seq, i);
-        if (row_item(row, 0, out + i) || row_item(row, 1, out + n + i) ||
-            row_item(row, 2, out + 2 * n + i)) {
+        if (row_item(row, 0, out + i) || row_item(row, 1, out + n + 2 * i) ||
+            row_item(row, 2, out + n + 2 * i + 1)) {
             PyMem_Free(out);
             Py_DECREF(seq);
             return NULL;
@@ -170,17 +170,17 @@ static double *read_knots(PyObject *rows, Py_ssize_t *count)
  */
 static double *sample(const double *knots, Py_ssize_t n_knots, Py_ssize_t *count)
 {
-    const double *kt = knots, *kx = knots + n_knots, *ky = knots + 2 * n_knots;
+    const double *kt = knots, *kxy = knots + n_knots;
     const double t0 = kt[0], t1 = kt[n_knots - 1];
     Py_ssize_t n, inner, m, i, guess = 0;
-    double *out, *xy, step;
+    double *out, step;
     if (n_knots == 1 || t1 <= t0) {
         out = PyMem_Malloc(3 * sizeof(double));
         if (out == NULL)
             return (double *)PyErr_NoMemory();
         out[0] = t1;
-        out[1] = kx[n_knots - 1];
-        out[2] = ky[n_knots - 1];
+        out[1] = kxy[2 * (n_knots - 1)];
+        out[2] = kxy[2 * (n_knots - 1) + 1];
         *count = 1;
         return out;
     }
@@ -198,19 +198,8 @@ static double *sample(const double *knots, Py_ssize_t n_knots, Py_ssize_t *count
     out[n - 1] = t1;
     for (i = 0; i < inner; ++i)
         out[n + i] = kt[1 + i];
-    /* The knots' x + iy as interleaved pairs, for interp. */
-    xy = PyMem_Malloc(2 * n_knots * sizeof(double));
-    if (xy == NULL) {
-        PyMem_Free(out);
-        return (double *)PyErr_NoMemory();
-    }
-    for (i = 0; i < n_knots; ++i) {
-        xy[2 * i] = kx[i];
-        xy[2 * i + 1] = ky[i];
-    }
     for (i = 0; i < m; ++i)
-        interp(kt, xy, n_knots, out[i], &guess, out + m + i, out + 2 * m + i);
-    PyMem_Free(xy);
+        interp(kt, kxy, n_knots, out[i], &guess, out + m + i, out + 2 * m + i);
     *count = m;
     return out;
 }

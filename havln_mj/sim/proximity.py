@@ -160,16 +160,23 @@ def knots_proximity(
         return track_proximity(crowd, times, positions, distance, near)
     if rows[-1][0] <= UNROLLED_S:
         if _closest is not None:
-            t = table()
-            smallest, hit = _closest(
-                rows, near, t.unrolled_frames, t.unrolled_axis, t.unrolled, distance
-            )
-            return proximity_of(hit, smallest)
+            return _compiled(table(), rows, near, distance)
         if len(near) == 1:
             return _one_person(table(), rows, near[0], distance)
     out = [NO_PROXIMITY]
     _tabulated(table(), [(0, rows, near)], distance, out)
     return out[0]
+
+
+def _compiled(table, rows: Sequence[Sequence[float]], people: list[int], distance: float):
+    """The signal of one track near ``people``, read from the unrolled tracks in compiled code.
+
+    Only for tracks within :data:`UNROLLED_S`, where the package's C extension is built.
+    """
+    smallest, hit = _closest(
+        rows, people, table.unrolled_frames, table.unrolled_axis, table.unrolled, distance
+    )
+    return proximity_of(hit, smallest)
 
 
 def _one_person(table, rows: Sequence[Sequence[float]], k: int, distance: float) -> Proximity:
@@ -313,10 +320,8 @@ def _tabulated(table, items: list, distance: float, out: list[Proximity]) -> Non
     so measuring them changes neither its flags nor its reported distance.
     """
     if _closest is not None and all(rows[-1][0] <= UNROLLED_S for _, rows, _ in items):
-        frames, axis, values = table.unrolled_frames, table.unrolled_axis, table.unrolled
         for slot, rows, people in items:
-            smallest, hit = _closest(rows, people, frames, axis, values, distance)
-            out[slot] = proximity_of(hit, smallest)
+            out[slot] = _compiled(table, rows, people, distance)
         return
     if len(items) == 1:
         _, rows, people = items[0]
