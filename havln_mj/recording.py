@@ -14,14 +14,13 @@ import json
 import math
 import os
 import shutil
-import signal
-import threading
 from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from havln_mj.cache import pid_alive
+from havln_mj.ctrl_c import CtrlC
 from havln_mj.errors import OutputError
 from havln_mj.frames import heading_to, wrap_angle
 from havln_mj.render.video import SizedOnFirstFrame
@@ -39,41 +38,10 @@ _STAGING = ".havln-staging-"
 Walk = Callable[[object, str, Sequence[str]], list]
 
 
-class _CtrlC:
-    """Remembers a Ctrl-C (SIGINT) while installed.
-
-    It remembers one whose KeyboardInterrupt a library swallowed, too: rtree's loader catches
-    every exception while it loads its library.
-    """
-
-    def __init__(self) -> None:
-        self.seen = False
-        self._previous = None
-
-    def _handle(self, signum: int, frame: object) -> None:
-        self.seen = True
-        raise KeyboardInterrupt
-
-    def install(self) -> None:
-        """Takes over SIGINT, unless it is ignored or this is not the main thread."""
-        if threading.current_thread() is not threading.main_thread():
-            return
-        previous = signal.getsignal(signal.SIGINT)
-        if previous is not signal.SIG_IGN:
-            self._previous = previous
-            signal.signal(signal.SIGINT, self._handle)
-
-    def restore(self) -> None:
-        """Puts the earlier SIGINT handler back."""
-        if self._previous is not None:
-            signal.signal(signal.SIGINT, self._previous)
-            self._previous = None
-
-
 class _Stage:
     """A staging folder whose files replace the run folder's outputs at :meth:`finish`."""
 
-    def __init__(self, out: Path, ctrl_c: _CtrlC) -> None:
+    def __init__(self, out: Path, ctrl_c: CtrlC) -> None:
         self.out = out
         self.path = out / f"{_STAGING}{os.getpid()}"
         self._ctrl_c = ctrl_c
@@ -122,7 +90,7 @@ def staged_outputs(out: Path) -> Iterator[_Stage]:
             pid = old.name.removeprefix(_STAGING)
             if not pid.isdigit() or not pid_alive(int(pid)):
                 shutil.rmtree(old, ignore_errors=True)
-        ctrl_c = _CtrlC()
+        ctrl_c = CtrlC()
         stage = _Stage(out, ctrl_c)
         stage.path.mkdir()
     except OSError as exc:

@@ -19,6 +19,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from havln_mj import argchecks
+from havln_mj.ctrl_c import CtrlC
 from havln_mj.errors import HavlnError, InvalidArgumentError
 from havln_mj.humans.mujoco_people import DRAW_STYLES
 from havln_mj.scene.realscan import CONNECTIVITY_ENV, resolve_connectivity_dir
@@ -77,12 +78,14 @@ def _interrupt(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
 
 
-def _stop_on_terminate() -> None:
-    """Makes a build worker clean up on SIGTERM as on Ctrl-C.
+def _init_worker() -> None:
+    """Makes a build worker clean up on SIGTERM as on Ctrl-C, and keep a lost Ctrl-C quiet.
 
     A pool whose worker died terminates the others; without this their staging folders stay.
+    A worker whose Ctrl-C was lost finishes its scene, which is then kept whole.
     """
     signal.signal(signal.SIGTERM, _interrupt)
+    CtrlC().install()
 
 
 def scenes_build(args: argparse.Namespace) -> int:
@@ -98,19 +101,26 @@ def scenes_build(args: argparse.Namespace) -> int:
     if note:
         print(note, file=sys.stderr)
     failures = 0
-    with ProcessPoolExecutor(max_workers=workers, initializer=_stop_on_terminate) as pool:
-        futures = {
-            pool.submit(build_scene, s, args.mp3d_dir, args.connectivity_dir, args.collision): s
-            for s in ids
-        }
-        try:
-            with tqdm(total=len(ids), desc="scenes", unit="scene") as bar:
-                for future in as_completed(futures):
-                    failures += _report(futures[future], future)
-                    bar.update()
-        except KeyboardInterrupt:
-            pool.shutdown(wait=True, cancel_futures=True)  # scenes not started stay unbuilt
-            raise
+    ctrl_c = CtrlC()
+    ctrl_c.install()
+    try:
+        with ProcessPoolExecutor(max_workers=workers, initializer=_init_worker) as pool:
+            futures = {
+                pool.submit(build_scene, s, args.mp3d_dir, args.connectivity_dir, args.collision): s
+                for s in ids
+            }
+            try:
+                with tqdm(total=len(ids), desc="scenes", unit="scene") as bar:
+                    for future in as_completed(futures):
+                        failures += _report(futures[future], future)
+                        bar.update()
+                if ctrl_c.seen:
+                    raise KeyboardInterrupt
+            except KeyboardInterrupt:
+                pool.shutdown(wait=True, cancel_futures=True)  # scenes not started stay unbuilt
+                raise
+    finally:
+        ctrl_c.restore()
     print(f"built {len(ids) - failures} of {len(ids)} scenes")
     return 1 if failures else 0
 
