@@ -15,7 +15,11 @@ import threading
 
 
 class CtrlC:
-    """Remembers a Ctrl-C (SIGINT) while installed; :attr:`seen` tells whether one came."""
+    """Remembers a Ctrl-C (SIGINT) while installed.
+
+    Attributes:
+        seen: Whether a Ctrl-C came while installed, raised or lost.
+    """
 
     def __init__(self) -> None:
         self.seen = False
