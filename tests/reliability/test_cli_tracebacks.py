@@ -150,4 +150,3 @@ def test_an_interrupted_scenes_build_exits_130_and_leaves_no_staging(fresh_cache
     assert "Traceback" not in stderr, stderr[-3000:]
     assert proc.returncode == 130 and "interrupted" in stderr
     assert not [p for p in scans.iterdir() if p.name.startswith(".")]
-
