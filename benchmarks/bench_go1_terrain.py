@@ -21,7 +21,9 @@
 
 Prints one JSON object. Run:
 ``python benchmarks/bench_go1_terrain.py [--walks 100] [--parts courses,seams,proxy]
-[--proxy-edges N] [--floor-primitives 1000]``.
+[--controller crawl] [--risers 12] [--proxy-edges N] [--floor-primitives 1000]``. The crawl
+walks the stair courses down backwards (facing up the stair, ``forward`` of minus the
+distance).
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ from common import machine
 
 from havln_mj.frames import heading_to, wrap_angle
 from havln_mj.robot.go1 import Go1Body, Go1Gains, add_go1, load_gains
+from havln_mj.robot.go1.constants import CONTROLLERS
 from havln_mj.robot.go1.courses import START_X, add_box, ramp_spec, stairs_spec
 from havln_mj.robot.go1.learned import LearnedPolicy, load_policy
 from havln_mj.robot.go1.model import flat_floor_spec
@@ -61,8 +64,9 @@ def _course(
     controller: str,
     gains: Go1Gains,
     policy: LearnedPolicy | None,
+    risers: int = 12,
 ) -> dict:
-    spec, course = stairs_spec(riser=size) if kind == "stairs" else ramp_spec(size)
+    spec, course = stairs_spec(riser=size, risers=risers) if kind == "stairs" else ramp_spec(size)
     add_go1(spec)
     model = spec.compile()
     data = mujoco.MjData(model)
@@ -71,7 +75,9 @@ def _course(
     start_x, goal_x = (course.top_x, START_X) if down else (START_X, course.top_x)
     goal = (goal_x, 0.0)
     start_z, goal_z = (course.rise, 0.0) if down else (0.0, course.rise)
-    heading = -math.pi / 2 if down else math.pi / 2
+    # The crawl descends backwards, facing up the stair (its knees would strike the noses).
+    backwards = down and controller == "crawl"
+    heading = -math.pi / 2 if down and not backwards else math.pi / 2
     ok = falls = timeouts = 0
     seconds, progress = [], []
     steps, wall = 0, 0.0
@@ -88,10 +94,11 @@ def _course(
 
         t = time.perf_counter()
         p = robot.true_pose()
-        bearing = heading_to((p.x, p.y), goal)
+        bearing = heading_to((p.x, p.y), goal) + (math.pi if backwards else 0.0)
         aim = robot.turn(wrap_angle(bearing - p.heading), on_tick=track)
         p = robot.true_pose()
-        res = robot.forward(math.hypot(goal[0] - p.x, goal[1] - p.y), on_tick=track)
+        distance = math.hypot(goal[0] - p.x, goal[1] - p.y)
+        res = robot.forward(-distance if backwards else distance, on_tick=track)
         wall += time.perf_counter() - t
         steps += aim.steps + res.steps
         p = robot.true_pose()
@@ -104,7 +111,9 @@ def _course(
         progress.append(min(1.0, best[0]))
     unit = "m" if kind == "stairs" else "deg"
     return {
-        "course": f"{kind} {size:g} {unit} {'down' if down else 'up'}",
+        "course": f"{kind} {size:g} {unit} {'down' if down else 'up'}"
+        + (f", {risers} risers" if kind == "stairs" else "")
+        + (", backwards" if backwards else ""),
         "walks": walks,
         "success": round(ok / walks, 3),
         "falls": round(falls / walks, 3),
@@ -250,7 +259,8 @@ def main() -> None:
     parser.add_argument("--parts", default="courses,seams,proxy")
     parser.add_argument("--courses", default="stairs,ramp", help="course kinds to walk")
     parser.add_argument("--floor-primitives", type=int, default=1000)
-    parser.add_argument("--controller", default="terrain", choices=("terrain", "trot", "learned"))
+    parser.add_argument("--controller", default="terrain", choices=CONTROLLERS)
+    parser.add_argument("--risers", type=int, default=12, help="risers of the stair courses")
     parser.add_argument("--proxy-edges", type=int, default=0, help="0: every stair edge")
     parser.add_argument("--gains", type=Path, default=None, help="gains.json to use")
     parser.add_argument(
@@ -280,7 +290,17 @@ def main() -> None:
         cells = [("stairs", r) for r in STAIRS if "stairs" in kinds]
         cells += [("ramp", a) for a in RAMPS if "ramp" in kinds]
         out["courses"] = [
-            _course(kind, size, down, args.walks, args.seed + k, args.controller, gains, policy)
+            _course(
+                kind,
+                size,
+                down,
+                args.walks,
+                args.seed + k,
+                args.controller,
+                gains,
+                policy,
+                args.risers,
+            )
             for k, (kind, size) in enumerate(cells)
             for down in (False, True)
         ]

@@ -41,7 +41,7 @@ from havln_mj.errors import InvalidArgumentError
 from havln_mj.frames import heading_to, wrap_angle
 from havln_mj.humans.mujoco_people import PeopleWriter, add_people
 from havln_mj.nav import NavGrid, build_navgrids
-from havln_mj.robot.go1.constants import CONTROLLERS
+from havln_mj.robot.go1.constants import CONTROLLERS, STAND_HEIGHT
 from havln_mj.robot.go1.model import add_go1
 from havln_mj.robot.go1.primitives import Go1Body, OnTick, PrimitiveResult
 from havln_mj.scene.navgraph import LEVEL_GAP
@@ -54,6 +54,7 @@ from havln_mj.sim.world import WorldOptions, build_world, world_spec
 
 PREFIX = "go1/"
 _AT_VIEWPOINT = 0.5  # metres: a robot this close to a viewpoint stands at it (for routes)
+DESCENT = 0.1  # metres: a target floor this far below the robot's is down a stair
 
 
 @dataclass(frozen=True)
@@ -70,8 +71,9 @@ class LeggedOptions:
         retry_m: A graph move ending farther than this from its viewpoint walks again.
         menagerie_xml: A user's Menagerie ``go1.xml`` to use instead of the built-in model.
         controller: The gait: ``"trot"`` (blind, flat floors), ``"terrain"`` (reads a
-            height scan) or ``"learned"`` (a trained policy's corrections to the terrain
-            gait); see :class:`~havln_mj.robot.go1.primitives.Go1Body`.
+            height scan), ``"learned"`` (a trained policy's corrections to the terrain
+            gait) or ``"crawl"`` (the slow stair crawl, which goes down stairs backwards);
+            see :class:`~havln_mj.robot.go1.primitives.Go1Body`.
     """
 
     estimate: str = "truth"
@@ -304,8 +306,11 @@ class LeggedAgent:
                         break
                     if gap > 0.02:
                         bearing = heading_to(np.array([p.x, p.y, 0.0]), point)
+                        # The crawl goes down a stair backwards (its knees point backwards).
+                        back = self.body.crawl and point[2] < p.z - STAND_HEIGHT - DESCENT
+                        bearing += math.pi if back else 0.0
                         done.append(do("turn", wrap_angle(bearing - p.heading)))
-                        done.append(do("forward", gap))
+                        done.append(do("forward", -gap if back else gap))
                     if self.body.fallen:
                         return done
             if final_heading is not None:

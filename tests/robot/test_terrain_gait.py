@@ -138,7 +138,7 @@ def test_placed_on_a_stair_it_stands_on_its_treads() -> None:
         assert 0.05 < fx - 0.28 * math.floor(fx / 0.28) < 0.23
 
 
-@pytest.mark.parametrize("controller", ["terrain", "trot"])
+@pytest.mark.parametrize("controller", ["terrain", "trot", "crawl"])
 def test_a_robot_pushed_over_on_a_stair_is_fallen(controller: str) -> None:
     spec, _ = stairs_spec(riser=0.17, tread=0.28, risers=12)
     body = _on(spec, controller)

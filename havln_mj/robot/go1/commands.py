@@ -68,13 +68,15 @@ class Stall:
 class ForwardCommand:
     """Walks ``distance`` metres along the start heading (negative: backwards) at ≤ ``v_max``."""
 
-    def __init__(self, body: Walker, distance: float, v_max: float) -> None:
+    def __init__(
+        self, body: Walker, distance: float, v_max: float, stall_seconds: float = STALL_SECONDS
+    ) -> None:
         e = body.est
         self.body, self.distance, self.v_max = body, distance, v_max
         self.x0, self.y0, self.yaw0 = e.x, e.y, e.yaw
         self.c0, self.s0 = math.cos(self.yaw0), math.sin(self.yaw0)
         self.sign = 1.0 if distance >= 0 else -1.0
-        self.stall = Stall(body.data, STALL_SECONDS, STALL_DISTANCE)
+        self.stall = Stall(body.data, stall_seconds, STALL_DISTANCE)
 
     def __call__(self, hold: bool) -> tuple[float, float, float, bool]:
         """The twist and whether the target is reached."""
@@ -101,7 +103,7 @@ class ForwardCommand:
 class TurnCommand:
     """Turns in place by ``theta`` radians of heading (positive turns right)."""
 
-    def __init__(self, body: Walker, theta: float) -> None:
+    def __init__(self, body: Walker, theta: float, stall_seconds: float = STALL_SECONDS) -> None:
         e = body.est
         self.body = body
         self.x0, self.y0 = e.x, e.y
@@ -109,7 +111,7 @@ class TurnCommand:
         self.sign = 1.0 if self.target >= 0 else -1.0
         self.turned = 0.0
         self.last = e.yaw
-        self.stall = Stall(body.data, STALL_SECONDS, STALL_ANGLE)
+        self.stall = Stall(body.data, stall_seconds, STALL_ANGLE)
 
     def __call__(self, hold: bool) -> tuple[float, float, float, bool]:
         """The twist and whether the target is reached."""

@@ -14,7 +14,7 @@ from havln_mj.paths import asset_path
 def _check_numbers(obj) -> None:
     for f in fields(obj):
         value = getattr(obj, f.name)
-        if f.name == "terrain":
+        if f.name in ("terrain", "crawl"):
             continue
         if not (isinstance(value, int | float) and math.isfinite(value)) or (
             value < 0 and f.name != "foot_x_offset"
@@ -127,6 +127,99 @@ class TerrainGains:
 
 
 @dataclass(frozen=True)
+class CrawlGains:
+    """Gains of the stair crawl (:mod:`havln_mj.robot.go1.crawl`; SI units).
+
+    Attributes:
+        shift_time: Least time the trunk moves over three feet before the fourth lifts (s).
+        swing_time: Time a swing takes from lift-off to its foothold (s).
+        clearance: Swing foot above the higher of its lift-off and foothold (m).
+        height: Trunk height above the ground under the hips (m).
+        stride: A foothold's advance on the foot's last one (m).
+        lead_reach: Farthest ahead of its hip a leading leg (the front legs walking
+            forwards) steps (m).
+        trail_reach: The same for a trailing leg (m).
+        drop_gap: A foothold keeps this far from the edge of a drop (m).
+        face_gap: A foothold keeps this far from the foot of a riser ahead (m).
+        edge_jump: A height step this big between 1 cm samples is an edge (m).
+        lead: The centre of mass aims this far ahead of a support triangle's centroid (m).
+        lift_margin: A foot lifts once the centre of mass is this far inside the other
+            three feet's triangle (m).
+        target_margin: The centre-of-mass goal keeps this far inside that triangle (m).
+        kp_xy: Horizontal stiffness of the centre of mass (N/m).
+        kd_xy: Horizontal damping (N·s/m).
+        kp_z: Vertical stiffness (N/m).
+        kd_z: Vertical damping (N·s/m).
+        kp_attitude: Attitude stiffness (N·m/rad).
+        kd_attitude: Attitude damping (N·m·s/rad).
+        error_cap: Horizontal position error the stiffness acts on at most (m).
+        friction: Friction coefficient the stance forces keep within.
+        kp_swing: Joint stiffness of a swing leg (N·m/rad).
+        kd_swing: Joint damping of a swing leg (N·m·s/rad).
+        touch_force: Contact force that lands a swing foot (N).
+        ground_window: Half-length of ground averaged under each hip for the trunk pose (m).
+        below_foot: A hip may be this much lower than its stance foot's ground (m).
+        above_foot: A hip may be this much higher than its stance foot's ground (m).
+        below_next: The swing leg's hip may be this much lower than its foothold (m).
+        above_next: The swing leg's hip may be this much higher than its foothold (m).
+        pitch_rate: Fastest change of the trunk pitch reference (rad/s).
+        height_rate: Fastest change of the trunk height reference (m/s).
+        yaw_rate: Fastest turn asked of the heading reference (rad/s).
+        yaw_lead: The heading reference leads the trunk's by the asked turn rate times this
+            (s).
+        speed_floor: Slowest walk a forward primitive waits for before it times out (m/s).
+        turn_floor: Slowest turn a turn primitive waits for (rad/s).
+        stall_time: A primitive without progress for this long has stalled (s).
+        control_decimation: Physics steps per controller update.
+    """
+
+    shift_time: float = 0.25
+    swing_time: float = 0.45
+    clearance: float = 0.06
+    height: float = 0.26
+    stride: float = 0.16
+    lead_reach: float = 0.16
+    trail_reach: float = 0.10
+    drop_gap: float = 0.12
+    face_gap: float = 0.05
+    edge_jump: float = 0.03
+    lead: float = 0.06
+    lift_margin: float = 0.03
+    target_margin: float = 0.05
+    kp_xy: float = 300.0
+    kd_xy: float = 50.0
+    kp_z: float = 900.0
+    kd_z: float = 60.0
+    kp_attitude: float = 300.0
+    kd_attitude: float = 25.0
+    error_cap: float = 0.08
+    friction: float = 0.42
+    kp_swing: float = 250.0
+    kd_swing: float = 4.0
+    touch_force: float = 8.0
+    ground_window: float = 0.15
+    below_foot: float = 0.08
+    above_foot: float = 0.06
+    below_next: float = 0.10
+    above_next: float = 0.06
+    pitch_rate: float = 0.25
+    height_rate: float = 0.05
+    yaw_rate: float = 0.25
+    yaw_lead: float = 0.5
+    speed_floor: float = 0.015
+    turn_floor: float = 0.05
+    stall_time: float = 10.0
+    control_decimation: int = 2
+
+    def __post_init__(self) -> None:
+        _check_numbers(self)
+        if not (isinstance(self.control_decimation, int) and self.control_decimation >= 1):
+            raise InvalidArgumentError(
+                f"control_decimation must be an integer >= 1, got {self.control_decimation!r}"
+            )
+
+
+@dataclass(frozen=True)
 class Go1Gains:
     """Gait, velocity-loop and primitive gains (SI units, radians).
 
@@ -163,6 +256,7 @@ class Go1Gains:
         control_decimation: Physics steps per controller update (1 = 500 Hz control).
         tick_period: Physics time between ``on_tick`` calls (s); at most 1/16.
         terrain: Gains of the terrain-aware gait.
+        crawl: Gains of the stair crawl.
     """
 
     period: float = 0.4
@@ -195,6 +289,7 @@ class Go1Gains:
     control_decimation: int = 1
     tick_period: float = 0.05
     terrain: TerrainGains = field(default_factory=TerrainGains)
+    crawl: CrawlGains = field(default_factory=CrawlGains)
 
     def __post_init__(self) -> None:
         _check_numbers(self)
@@ -225,7 +320,7 @@ def load_gains(path: str | Path | None = None) -> Go1Gains:
     """Reads gains from a JSON object of ``Go1Gains`` fields (default: the shipped file).
 
     Keys starting with ``_`` are comments. Missing keys keep their defaults. The object under
-    ``"terrain"`` holds :class:`TerrainGains`.
+    ``"terrain"`` holds :class:`TerrainGains`, the one under ``"crawl"`` :class:`CrawlGains`.
 
     Raises:
         MalformedDataError: Unknown keys or not a JSON object.
@@ -238,10 +333,13 @@ def load_gains(path: str | Path | None = None) -> Go1Gains:
     if not isinstance(raw, dict):
         raise MalformedDataError(f"{path} must hold a JSON object of gains")
     values = known_fields(raw, Go1Gains, path)
-    terrain = values.pop("terrain", {})
-    if not isinstance(terrain, dict):
-        raise MalformedDataError(f"{path}: 'terrain' must be a JSON object of terrain gains")
-    return Go1Gains(**values, terrain=TerrainGains(**known_fields(terrain, TerrainGains, path)))
+    parts = {}
+    for key, cls in (("terrain", TerrainGains), ("crawl", CrawlGains)):
+        part = values.pop(key, {})
+        if not isinstance(part, dict):
+            raise MalformedDataError(f"{path}: {key!r} must be a JSON object of {key} gains")
+        parts[key] = cls(**known_fields(part, cls, path))
+    return Go1Gains(**values, **parts)
 
 
 def known_fields(raw: dict, cls: type, where: object) -> dict:

@@ -21,6 +21,7 @@ from havln_mj.errors import InvalidArgumentError, did_you_mean
 from havln_mj.frames import wrap_angle, wrap_heading
 from havln_mj.robot.go1 import constants as const
 from havln_mj.robot.go1.commands import ForwardCommand, TurnCommand, clip
+from havln_mj.robot.go1.crawl import CrawlGait
 from havln_mj.robot.go1.estimator import ESTIMATES, OdometryEstimator, TruthEstimator, quat_yaw
 from havln_mj.robot.go1.gains import Go1Gains, load_gains
 from havln_mj.robot.go1.gait import TrotGait
@@ -54,9 +55,11 @@ class Go1Body:
         controller: ``"trot"`` (the blind trot, :mod:`~havln_mj.robot.go1.gait`) or
             ``"terrain"`` (the terrain-aware gait, :mod:`~havln_mj.robot.go1.terrain_gait`,
             which reads the collision geometry through its ``scan``), or ``"learned"`` (the
-            terrain gait with a learned residual policy, :mod:`~havln_mj.robot.go1.learned`).
-            With ``"terrain"`` and ``"learned"``, :meth:`reset` stands the robot on the ground
-            as it is (a stair, a ramp).
+            terrain gait with a learned residual policy, :mod:`~havln_mj.robot.go1.learned`),
+            or ``"crawl"`` (the statically stable stair crawl, :mod:`~havln_mj.robot.go1.crawl`:
+            it climbs stairs walking forwards and descends them walking backwards, at its own
+            slow pace). With ``"terrain"`` and ``"learned"``, :meth:`reset` stands the robot
+            on the ground as it is (a stair, a ramp).
         policy: The learned controller's policy (default: the shipped
             ``robots/go1/policy.npz``), or only its
             :class:`~havln_mj.robot.go1.learned.observation.PolicySpec` for a trainer that
@@ -119,6 +122,7 @@ class Go1Body:
         self._truth = TruthEstimator(model, data, self.qadr, self.dadr)
         self.controller = controller
         self.terrain = controller in ("terrain", "learned")
+        self.crawl = controller == "crawl"
         self.policy = policy if policy is not None or controller != "learned" else load_policy()
         self.scan = HeightScan(model, data, self.trunk_id)
         self.gait = self._new_gait()
@@ -127,7 +131,12 @@ class Go1Body:
         self._ix = self._iy = self._iw = 0.0  # velocity-loop integrals
         self.est.reset()
 
-    def _new_gait(self) -> TrotGait | TerrainGait:
+    def _new_gait(self) -> TrotGait | TerrainGait | CrawlGait:
+        if self.crawl:
+            return CrawlGait(
+                self.gains.crawl, self.model, self.data, self.trunk_id, self.joint_qadr,
+                self.joint_dadr, self.foot_ids, self.scan,
+            )  # fmt: skip
         ground = (self.gains.terrain, self.data, self.est, self.joint_qadr, self.joint_dadr)
         ground += (self.foot_ids, self.scan)
         if self.controller == "learned":
@@ -220,7 +229,7 @@ class Go1Body:
         self._ix = self._iy = self._iw = 0.0
         self.est.reset()
         self._truth.reset()
-        if self.terrain:
+        if self.terrain or self.crawl:
             self.gait.reset()
         if settle > 0:
             self.stand(settle)
@@ -252,8 +261,12 @@ class Go1Body:
         distance = _check_finite("distance", distance, MAX_DISTANCE)
         g = self.gains
         v_max = g.odometry_v_max if self.estimate == "odometry" else g.forward_v_max
-        command = ForwardCommand(self, distance, v_max)
-        timeout = 2.0 + abs(distance) / max(g.forward_v_min, 1e-3)
+        if self.crawl:
+            command = ForwardCommand(self, distance, v_max, g.crawl.stall_time)
+            timeout = 2.0 + abs(distance) / g.crawl.speed_floor
+        else:
+            command = ForwardCommand(self, distance, v_max)
+            timeout = 2.0 + abs(distance) / max(g.forward_v_min, 1e-3)
         result = self._run("forward", distance, command, timeout, on_tick)
         return replace(result, timed_out=True) if command.stall.stalled else result
 
@@ -265,8 +278,12 @@ class Go1Body:
         """
         theta = _check_finite("theta", theta, MAX_TURN)
         g = self.gains
-        command = TurnCommand(self, theta)
-        timeout = 2.0 + abs(theta) / max(g.turn_w_min, 1e-3)
+        if self.crawl:
+            command = TurnCommand(self, theta, g.crawl.stall_time)
+            timeout = 2.0 + abs(theta) / g.crawl.turn_floor
+        else:
+            command = TurnCommand(self, theta)
+            timeout = 2.0 + abs(theta) / max(g.turn_w_min, 1e-3)
         result = self._run("turn", theta, command, timeout, on_tick)
         return replace(result, timed_out=True) if command.stall.stalled else result
 
@@ -295,7 +312,9 @@ class Go1Body:
         if self.fallen or self.is_fallen():
             self.fallen = True
             return self._result(kind, target, truth0, est0, t0, steps, False)
-        n = g.terrain.control_decimation if self.terrain else g.control_decimation
+        n = g.control_decimation
+        if self.terrain or self.crawl:
+            n = g.crawl.control_decimation if self.crawl else g.terrain.control_decimation
         dt = n * m.opt.timestep
         alpha = min(1.0, dt / g.velocity_filter) if g.velocity_filter > 0 else 1.0
         self._ix = self._iy = self._iw = 0.0
@@ -324,7 +343,7 @@ class Go1Body:
                 settle_end = d.time + (g.settle if walk else 0.0)
             if stage == "settle" and d.time >= settle_end - 1e-9:
                 break
-            if gait.walking and not self.terrain:  # the terrain gait holds speed itself
+            if gait.walking and not (self.terrain or self.crawl):  # these hold speed themselves
                 self._integrate(vx, vy, wz, dt)
             if gait.walking:
                 q = gait.step(
