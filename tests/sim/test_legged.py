@@ -246,29 +246,3 @@ def test_a_move_that_stalls_short_never_reports_the_target(tmp_path, edge, graph
     assert not state.arrived and state.location.viewpointId == a
     assert np.hypot(*(state.pose[:2] - pb[:2])) > 1.0
     assert sim.getGeodesicDistance([b])[0] > 1.0  # measured from where it stands
-
-
-@pytest.mark.slow
-def test_the_crawl_goes_down_a_proxy_stair_backwards(shared_data):
-    # The lowest straight stair edge (> 0.3 m) of a real building's graph proxy, walked down by
-    # go_to with the crawl: it turns its back to the lower viewpoint and walks there.
-    scan = load_scan("17DRP5sb8fy", connectivity_dir=shared_data / "mp3d_connectivity")
-    g = scan.graph
-    low, high = min(
-        (
-            (a, b) if g.floor_z(a) < g.floor_z(b) else (b, a)
-            for a, b, _ in g.edges()
-            if abs(g.floor_z(a) - g.floor_z(b)) > 0.3 and scan.route(a, b) is None
-        ),
-        key=lambda e: g.floor_z(e[1]) - g.floor_z(e[0]),
-    )
-    options = LeggedOptions(controller="crawl")
-    agent = LeggedAgent(LeggedWorld(scan, WorldOptions(collision="boxes"), NO_CROWD, options))
-    start, target = g.position(high), np.append(g.position(low)[:2], g.floor_z(low))
-    toward = heading_to(start, target)
-    agent.place(start, g.floor_z(high), toward, 0.0)
-    out = agent.go_to(target, None, 0.0)
-    assert not out.fell
-    assert np.hypot(*(agent.position()[:2] - target[:2])) < 0.3
-    assert agent.position()[2] - target[2] == pytest.approx(0.28, abs=0.08)  # on its floor
-    assert abs(wrap_angle(agent.heading() - (toward + math.pi))) < 0.6  # it faced back up

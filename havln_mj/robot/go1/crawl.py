@@ -98,7 +98,7 @@ class CrawlGait:
         self._goal: np.ndarray | None = None  # centre-of-mass goal (world)
         self._next: np.ndarray | None = None  # foothold of the leg that swings next
         self._z = self._pitch = None
-        self._direction = 1
+        self._direction = 0  # set by the first twist: +1 forwards, -1 backwards
         self._time = 0.0
         quat = self.data.xquat[self.trunk_id]
         self._yaw = math.atan2(
@@ -128,12 +128,15 @@ class CrawlGait:
         pos = d.xpos[self.trunk_id]
         feet = np.array([d.geom_xpos[g] for g in self.foot_geoms])
         if self.walking:
-            if abs(vx) > 1e-3:
+            # The walk keeps the direction it started in: a sign change of vx (an overshoot
+            # near the target) holds it, as the leg sequence must not reverse mid-cycle.
+            if self._direction == 0 and abs(vx) > 1e-3:
                 self._direction = 1 if vx > 0 else -1
-            # The heading leads the trunk's by the asked turn (no integrator to run away).
+            along = vx * self._direction > 1e-3
+            # The heading leads the trunk's by the asked turn (no integrator to wind up).
             turn = max(-self.g.yaw_rate, min(self.g.yaw_rate, wz))
             self._yaw = math.atan2(rot[1, 0], rot[0, 0]) + turn * self.g.yaw_lead
-            self._sequence(pos, rot, feet, moving=abs(vx) > 1e-3 or abs(wz) > 1e-3)
+            self._sequence(pos, rot, feet, moving=along or abs(wz) > 1e-3)
         targets = self._stance_targets(dt, pos, rot, feet)
         if self._swing is not None:
             self._swing_targets(pos, rot, targets)
