@@ -22,6 +22,11 @@ def _check_numbers(obj) -> None:
             raise InvalidArgumentError(f"gain {f.name} must be a finite number >= 0, got {value!r}")
 
 
+def _check_decimation(value) -> None:
+    if not (isinstance(value, int) and value >= 1):
+        raise InvalidArgumentError(f"control_decimation must be an integer >= 1, got {value!r}")
+
+
 @dataclass(frozen=True)
 class TerrainGains:
     """Gains of the terrain-aware gait (:mod:`havln_mj.robot.go1.terrain_gait`; SI units).
@@ -103,10 +108,7 @@ class TerrainGains:
 
     def __post_init__(self) -> None:
         _check_numbers(self)
-        if not (isinstance(self.control_decimation, int) and self.control_decimation >= 1):
-            raise InvalidArgumentError(
-                f"control_decimation must be an integer >= 1, got {self.control_decimation!r}"
-            )
+        _check_decimation(self.control_decimation)
         for name, lo, hi in (
             ("flat_duty", 0.4, 0.8),
             ("rough_duty", 0.4, 0.8),
@@ -213,10 +215,7 @@ class CrawlGains:
 
     def __post_init__(self) -> None:
         _check_numbers(self)
-        if not (isinstance(self.control_decimation, int) and self.control_decimation >= 1):
-            raise InvalidArgumentError(
-                f"control_decimation must be an integer >= 1, got {self.control_decimation!r}"
-            )
+        _check_decimation(self.control_decimation)
 
 
 @dataclass(frozen=True)
@@ -301,10 +300,7 @@ class Go1Gains:
             raise InvalidArgumentError(
                 f"foot_depth must be in [0.15, 0.4] m, got {self.foot_depth}"
             )
-        if not (isinstance(self.control_decimation, int) and self.control_decimation >= 1):
-            raise InvalidArgumentError(
-                f"control_decimation must be an integer >= 1, got {self.control_decimation!r}"
-            )
+        _check_decimation(self.control_decimation)
         if not 0.0 < self.tick_period <= 1.0 / 16.0:
             raise InvalidArgumentError(
                 f"tick_period must be in (0, 1/16] s (on_tick runs at >= 16 Hz), "
