@@ -36,6 +36,8 @@ import numpy as np
 
 from havln_mj.robot.go1 import constants as const
 from havln_mj.robot.go1.actuation import KP, clip_joints
+from havln_mj.robot.go1.estimator import quat_yaw
+from havln_mj.robot.go1.frames import rotation
 from havln_mj.robot.go1.gains import CrawlGains
 from havln_mj.robot.go1.height_scan import HeightScan
 from havln_mj.robot.go1.kinematics import leg_ik, leg_jacobian_t
@@ -82,7 +84,9 @@ class CrawlGait:
         scan: HeightScan,
     ) -> None:
         self.g, self.model, self.data, self.scan = gains, model, data, scan
+        self._window = np.linspace(-gains.ground_window, gains.ground_window, 7).tolist()
         self.trunk_id = trunk_id
+        self._dof = int(model.jnt_dofadr[model.body_jntadr[trunk_id]])  # the free joint's
         self.joint_qadr, self.joint_dadr, self.foot_geoms = joint_qadr, joint_dadr, foot_geoms
         self.walking = False
         self.stance = [True] * 4
@@ -100,11 +104,7 @@ class CrawlGait:
         self._z = self._pitch = None
         self._direction = 0  # set by the first twist: +1 forwards, -1 backwards
         self._time = 0.0
-        quat = self.data.xquat[self.trunk_id]
-        self._yaw = math.atan2(
-            2.0 * (quat[0] * quat[3] + quat[1] * quat[2]),
-            1.0 - 2.0 * (quat[2] ** 2 + quat[3] ** 2),
-        )
+        self._yaw = quat_yaw(*self.data.xquat[self.trunk_id])
         self._origin = self.data.xpos[self.trunk_id][:2].copy()
         self._line_yaw = self._yaw
 
@@ -148,8 +148,8 @@ class CrawlGait:
         if self._phase == "shift":
             if self._goal is None:
                 self._plan(leg, pos, rot, feet)
-            # The foothold follows the trunk as it shifts: it is where the hip is at lift-off.
-            self._next = self._foothold(leg, pos, rot, feet[leg])
+            else:  # the foothold follows the trunk as it shifts: where the hip is at lift-off
+                self._next = self._foothold(leg, pos, rot, feet[leg])
             if self._stop or not moving:
                 if self._stop:
                     self.walking = False
@@ -259,15 +259,15 @@ class CrawlGait:
         self._pitch += max(-g.pitch_rate * dt, min(g.pitch_rate * dt, pitch_goal - self._pitch))
         err = np.array([self._goal[0] - com[0], self._goal[1] - com[1], self._z - com[2]])
         err[:2] = np.clip(err[:2], -g.error_cap, g.error_cap)
-        vel = d.qvel[self._dof(0) : self._dof(3)]
+        vel = d.qvel[self._dof : self._dof + 3]
         kp = np.array([g.kp_xy, g.kp_xy, g.kp_z])
         kd = np.array([g.kd_xy, g.kd_xy, g.kd_z])
         force = kp * err - kd * vel + _WEIGHT
-        turn = _rotation(self._yaw, self._pitch) @ rot.T
+        turn = np.reshape(rotation(0.0, self._pitch, self._yaw), (3, 3)) @ rot.T
         angle = 0.5 * np.array(
             [turn[2, 1] - turn[1, 2], turn[0, 2] - turn[2, 0], turn[1, 0] - turn[0, 1]]
         )
-        omega = rot @ d.qvel[self._dof(3) : self._dof(6)]
+        omega = rot @ d.qvel[self._dof + 3 : self._dof + 6]
         moment = g.kp_attitude * angle - g.kd_attitude * omega
         down = {leg: feet[leg] for leg in range(4) if self.stance[leg]}
         shares = distribute(force, moment, com, down, g.friction)
@@ -282,9 +282,6 @@ class CrawlGait:
                 out[3 * leg + j] = q[3 * leg + j] + (bias - torque[j]) / KP
         return out
 
-    def _dof(self, k: int) -> int:
-        return int(self.model.jnt_dofadr[self.model.body_jntadr[self.trunk_id]]) + k
-
     def _posture(self, pos, rot, feet: np.ndarray) -> tuple[float, float]:
         """Trunk height and pitch goals: hips over the ground, each in reach of its foot."""
         g = self.g
@@ -295,7 +292,7 @@ class CrawlGait:
             hip = pos + rot @ _HIPS[leg]
             samples = [
                 self.scan.height(hip[0] + s * heading[0], hip[1] + s * heading[1], pos[2])
-                for s in np.linspace(-g.ground_window, g.ground_window, 7)
+                for s in self._window
             ]
             finite = [h for h in samples if math.isfinite(h)]
             foot_ground = feet[leg][2] - const.FOOT_RADIUS
@@ -366,9 +363,3 @@ def _same_level(a: float, b: float, jump: float) -> bool:
 def _gap(heights: list[float], k: int, side: int, g: CrawlGains) -> float:
     """The gap a foothold keeps from the edge at sample ``k`` toward ``side`` (±1)."""
     return g.drop_gap if heights[k + side] < heights[k] else g.face_gap
-
-
-def _rotation(yaw: float, pitch: float) -> np.ndarray:
-    """Rz(yaw) Ry(pitch) (positive pitch: nose down)."""
-    cy, sy, cp, sp = math.cos(yaw), math.sin(yaw), math.cos(pitch), math.sin(pitch)
-    return np.array([[cy * cp, -sy, cy * sp], [sy * cp, cy, sy * sp], [-sp, 0.0, cp]])

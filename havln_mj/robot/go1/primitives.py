@@ -20,7 +20,7 @@ import mujoco
 from havln_mj.errors import InvalidArgumentError, did_you_mean
 from havln_mj.frames import wrap_angle, wrap_heading
 from havln_mj.robot.go1 import constants as const
-from havln_mj.robot.go1.commands import ForwardCommand, TurnCommand, clip
+from havln_mj.robot.go1.commands import STALL_SECONDS, ForwardCommand, TurnCommand, clip
 from havln_mj.robot.go1.crawl import CrawlGait
 from havln_mj.robot.go1.estimator import ESTIMATES, OdometryEstimator, TruthEstimator, quat_yaw
 from havln_mj.robot.go1.gains import Go1Gains, load_gains
@@ -261,12 +261,13 @@ class Go1Body:
         distance = _check_finite("distance", distance, MAX_DISTANCE)
         g = self.gains
         v_max = g.odometry_v_max if self.estimate == "odometry" else g.forward_v_max
-        if self.crawl:
-            command = ForwardCommand(self, distance, v_max, g.crawl.stall_time)
-            timeout = 2.0 + abs(distance) / g.crawl.speed_floor
-        else:
-            command = ForwardCommand(self, distance, v_max)
-            timeout = 2.0 + abs(distance) / max(g.forward_v_min, 1e-3)
+        stall, floor = (
+            (g.crawl.stall_time, g.crawl.speed_floor)
+            if self.crawl
+            else (STALL_SECONDS, max(g.forward_v_min, 1e-3))
+        )
+        command = ForwardCommand(self, distance, v_max, stall)
+        timeout = 2.0 + abs(distance) / floor
         result = self._run("forward", distance, command, timeout, on_tick)
         return replace(result, timed_out=True) if command.stall.stalled else result
 
@@ -278,12 +279,13 @@ class Go1Body:
         """
         theta = _check_finite("theta", theta, MAX_TURN)
         g = self.gains
-        if self.crawl:
-            command = TurnCommand(self, theta, g.crawl.stall_time)
-            timeout = 2.0 + abs(theta) / g.crawl.turn_floor
-        else:
-            command = TurnCommand(self, theta)
-            timeout = 2.0 + abs(theta) / max(g.turn_w_min, 1e-3)
+        stall, floor = (
+            (g.crawl.stall_time, g.crawl.turn_floor)
+            if self.crawl
+            else (STALL_SECONDS, max(g.turn_w_min, 1e-3))
+        )
+        command = TurnCommand(self, theta, stall)
+        timeout = 2.0 + abs(theta) / floor
         result = self._run("turn", theta, command, timeout, on_tick)
         return replace(result, timed_out=True) if command.stall.stalled else result
 
@@ -312,9 +314,7 @@ class Go1Body:
         if self.fallen or self.is_fallen():
             self.fallen = True
             return self._result(kind, target, truth0, est0, t0, steps, False)
-        n = g.control_decimation
-        if self.terrain or self.crawl:
-            n = g.crawl.control_decimation if self.crawl else g.terrain.control_decimation
+        n = (g.crawl if self.crawl else g.terrain if self.terrain else g).control_decimation
         dt = n * m.opt.timestep
         alpha = min(1.0, dt / g.velocity_filter) if g.velocity_filter > 0 else 1.0
         self._ix = self._iy = self._iw = 0.0
