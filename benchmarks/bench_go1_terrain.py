@@ -76,7 +76,7 @@ def _course(
     goal = (goal_x, 0.0)
     start_z, goal_z = (course.rise, 0.0) if down else (0.0, course.rise)
     # The crawl descends backwards, facing up the stair (its knees would strike the noses).
-    backwards = down and controller == "crawl"
+    backwards = down and controller in ("crawl", "hybrid")
     heading = -math.pi / 2 if down and not backwards else math.pi / 2
     ok = falls = timeouts = 0
     seconds, progress = [], []

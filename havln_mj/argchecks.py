@@ -40,8 +40,9 @@ def add_go1_controller_flag(p: argparse.ArgumentParser) -> None:
         "--go1-controller",
         choices=CONTROLLERS,
         default="trot",
-        help="the GO1's gait: trot (blind, flat floors; default), terrain (height scan) or "
-        "learned (a trained policy over the terrain gait)",
+        help="the GO1's gait: trot (blind, flat floors; default), terrain (height scan), "
+        "learned (a trained policy over the terrain gait), crawl (the slow stair crawl) or "
+        "hybrid (the trot, and the crawl where a walk or turn meets a step)",
     )
 
 

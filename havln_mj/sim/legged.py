@@ -72,8 +72,9 @@ class LeggedOptions:
         menagerie_xml: A user's Menagerie ``go1.xml`` to use instead of the built-in model.
         controller: The gait: ``"trot"`` (blind, flat floors), ``"terrain"`` (reads a
             height scan), ``"learned"`` (a trained policy's corrections to the terrain
-            gait) or ``"crawl"`` (the slow stair crawl, which goes down stairs backwards);
-            see :class:`~havln_mj.robot.go1.primitives.Go1Body`.
+            gait), ``"crawl"`` (the slow stair crawl, which goes down stairs backwards) or
+            ``"hybrid"`` (the trot, and the crawl for a walk or turn over steps); see
+            :class:`~havln_mj.robot.go1.primitives.Go1Body`.
     """
 
     estimate: str = "truth"
@@ -307,7 +308,8 @@ class LeggedAgent:
                     if gap > 0.02:
                         bearing = heading_to(np.array([p.x, p.y, 0.0]), point)
                         # The crawl goes down a stair backwards (its knees point backwards).
-                        back = self.body.crawl and point[2] < p.z - STAND_HEIGHT - DESCENT
+                        down = point[2] < p.z - STAND_HEIGHT - DESCENT
+                        back = down and self.body.crawls(gap, bearing)
                         bearing += math.pi if back else 0.0
                         done.append(do("turn", wrap_angle(bearing - p.heading)))
                         done.append(do("forward", -gap if back else gap))

@@ -12,7 +12,7 @@ import math
 LEGS = ("FR", "FL", "RR", "RL")
 LEG_PARTS = ("hip", "thigh", "calf")
 
-CONTROLLERS = ("trot", "terrain", "learned", "crawl")
+CONTROLLERS = ("trot", "terrain", "learned", "crawl", "hybrid")
 """The gaits a :class:`~havln_mj.robot.go1.primitives.Go1Body` can walk with."""
 
 TRUNK = "trunk"

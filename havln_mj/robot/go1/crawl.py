@@ -47,11 +47,14 @@ _FORWARD_PAIRS = ((3, 1), (2, 0))  # (RL, FL), (RR, FR): trailing leg of a side 
 _BACKWARD_PAIRS = ((1, 3), (0, 2))
 _HIPS = tuple(np.array([hx, hy, 0.0]) for hx, hy in const.HIP_OFFSETS)
 _FOOT_LATERAL = const.HIP_Y + const.ABDUCTION  # a foot's nominal offset from the centre line
+# Each foot's place under its hip (trunk frame, x and y).
+_PLACES = np.array(const.HIP_OFFSETS) + np.outer(const.LEG_SIDE, (0.0, const.ABDUCTION))
 _WEIGHT = np.array([0.0, 0.0, const.TOTAL_MASS * 9.81])
 _SCAN_REACH = 0.3  # m each way along the walking direction searched for a safe foothold
 _SHIFT_GIVE_UP = 2.5  # s: a foot lifts after this long even if the shift fell short
 _LAND_FROM = 0.6  # share of the swing time after which a touch lands the foot
 _REACH_ON = 2.0  # swing times after which a foot that found no ground stands anyway
+_SQUARE_OFF = 0.02  # m: a foot this far from its place under the hip is stepped there first
 
 
 class CrawlGait:
@@ -103,16 +106,28 @@ class CrawlGait:
         self._next: np.ndarray | None = None  # foothold of the leg that swings next
         self._z = self._pitch = None
         self._direction = 0  # set by the first twist: +1 forwards, -1 backwards
+        self._squaring = 0  # swings left that step feet back under their hips
         self._time = 0.0
         self._yaw = quat_yaw(*self.data.xquat[self.trunk_id])
         self._origin = self.data.xpos[self.trunk_id][:2].copy()
         self._line_yaw = self._yaw
 
     def start(self) -> None:
-        """Starts walking along the trunk's current heading."""
+        """Starts walking along the trunk's current heading.
+
+        Feet that stand off their places under the hips (after a turn, or another gait's
+        walk) are first stepped there, one at a time: the walk then starts from the same
+        stance whatever came before it.
+        """
         if not self.walking:
             self.reset()
             self.walking = True
+            d = self.data
+            rot = d.xmat[self.trunk_id].reshape(3, 3)
+            feet = np.array([d.geom_xpos[g] for g in self.foot_geoms])
+            local = (feet - d.xpos[self.trunk_id]) @ rot
+            if np.hypot(*(local[:, :2] - _PLACES).T).max() > _SQUARE_OFF:
+                self._squaring = 4
 
     def request_stop(self) -> None:
         """Ends the walk once the foot in the air is down."""
@@ -174,6 +189,7 @@ class CrawlGait:
             else:
                 self._idx, self._pair = 0, 1 - self._pair
             feet[leg] = self.data.geom_xpos[self.foot_geoms[leg]]
+            self._squaring = max(0, self._squaring - 1)
             self._plan(self._pairs()[self._pair][self._idx], pos, rot, feet)
 
     def _pairs(self) -> tuple:
@@ -200,7 +216,7 @@ class CrawlGait:
         hip = pos + rot @ _HIPS[leg]
         leading = (leg < 2) == (self._direction > 0)
         reach = g.lead_reach if leading else g.trail_reach
-        along = float((foot + g.stride * walk - hip) @ walk)
+        along = float((foot + g.stride * walk - hip) @ walk) if not self._squaring else 0.0
         target = hip + walk * max(-0.05, min(reach, along))
         # Laterally on the walk's line: the line through the start along the heading.
         line_left = np.array([-math.sin(self._line_yaw), math.cos(self._line_yaw), 0.0])

@@ -173,6 +173,10 @@ class CrawlGains:
         turn_floor: Slowest turn a turn primitive waits for (rad/s).
         stall_time: A primitive without progress for this long has stalled (s).
         control_decimation: Physics steps per controller update.
+        trot_step: The hybrid controller trots where no step between neighbouring ground
+            samples (:mod:`~havln_mj.robot.go1.steps`) is higher than this (m) and no slope
+            steeper than ``trot_grade``, and crawls elsewhere.
+        trot_grade: The steepest slope the hybrid controller trots on (rise over run).
     """
 
     shift_time: float = 0.25
@@ -212,6 +216,8 @@ class CrawlGains:
     turn_floor: float = 0.05
     stall_time: float = 10.0
     control_decimation: int = 2
+    trot_step: float = 0.05
+    trot_grade: float = 0.2
 
     def __post_init__(self) -> None:
         _check_numbers(self)

@@ -11,6 +11,7 @@ primitive early with a flag. ``on_tick(sim_time)`` runs every ``tick_period`` of
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import replace
@@ -20,9 +21,11 @@ import mujoco
 from havln_mj.errors import InvalidArgumentError, did_you_mean
 from havln_mj.frames import wrap_angle, wrap_heading
 from havln_mj.robot.go1 import constants as const
+from havln_mj.robot.go1 import steps
 from havln_mj.robot.go1.commands import STALL_SECONDS, ForwardCommand, TurnCommand, clip
 from havln_mj.robot.go1.crawl import CrawlGait
 from havln_mj.robot.go1.estimator import ESTIMATES, OdometryEstimator, TruthEstimator, quat_yaw
+from havln_mj.robot.go1.footholds import standing_pose
 from havln_mj.robot.go1.gains import Go1Gains, load_gains
 from havln_mj.robot.go1.gait import TrotGait
 from havln_mj.robot.go1.height_scan import HeightScan
@@ -58,8 +61,10 @@ class Go1Body:
             terrain gait with a learned residual policy, :mod:`~havln_mj.robot.go1.learned`),
             or ``"crawl"`` (the statically stable stair crawl, :mod:`~havln_mj.robot.go1.crawl`:
             it climbs stairs walking forwards and descends them walking backwards, at its own
-            slow pace). With ``"terrain"`` and ``"learned"``, :meth:`reset` stands the robot
-            on the ground as it is (a stair, a ramp).
+            slow pace), or ``"hybrid"`` (the trot on level ground, the crawl for a primitive
+            whose walk or turn meets a step or a slope, :mod:`~havln_mj.robot.go1.steps`).
+            Except with ``"trot"``, :meth:`reset` stands the robot on the ground as it is
+            (a stair, a ramp).
         policy: The learned controller's policy (default: the shipped
             ``robots/go1/policy.npz``), or only its
             :class:`~havln_mj.robot.go1.learned.observation.PolicySpec` for a trainer that
@@ -122,7 +127,8 @@ class Go1Body:
         self._truth = TruthEstimator(model, data, self.qadr, self.dadr)
         self.controller = controller
         self.terrain = controller in ("terrain", "learned")
-        self.crawl = controller == "crawl"
+        self.hybrid = controller == "hybrid"
+        self.crawl = controller == "crawl"  # the crawl walks (the hybrid's choice of the moment)
         self.policy = policy if policy is not None or controller != "learned" else load_policy()
         self.scan = HeightScan(model, data, self.trunk_id)
         self.gait = self._new_gait()
@@ -214,8 +220,15 @@ class Go1Body:
             d.qvel[da] = 0.0
         self._write_ctrl(home)
         mujoco.mj_forward(m, d)
-        if self.terrain:  # stand on the ground as it is: a stair, a ramp
-            z, pitch, home = self.gait.standing_pose(x, y, yaw, z_floor + const.STAND_HEIGHT)
+        self._choose_gait(None)
+        # Stand on the ground as it is (a stair, a ramp): the crawl only where it is uneven.
+        if self.terrain or (self.crawl and self.meets_step()):
+            top = z_floor + const.STAND_HEIGHT
+            if self.terrain:
+                z, pitch, home = self.gait.standing_pose(x, y, yaw, top)
+            else:
+                ground = functools.partial(self.scan.height, top=top)
+                z, pitch, home = standing_pose(ground, x, y, yaw, top, self.gains.terrain)
             d.qpos[a + 2] = z + 0.002
             w = (math.cos(yaw / 2), math.sin(yaw / 2))
             p = (math.cos(pitch / 2), math.sin(pitch / 2))
@@ -259,6 +272,7 @@ class Go1Body:
         stands again, on a fall, or after ``2 + |distance| / forward_v_min`` seconds.
         """
         distance = _check_finite("distance", distance, MAX_DISTANCE)
+        self._choose_gait(distance)
         g = self.gains
         v_max = g.odometry_v_max if self.estimate == "odometry" else g.forward_v_max
         stall, floor = (
@@ -278,6 +292,7 @@ class Go1Body:
         robot stands again, on a fall, or after ``2 + |theta| / turn_w_min`` seconds.
         """
         theta = _check_finite("theta", theta, MAX_TURN)
+        self._choose_gait(None)
         g = self.gains
         stall, floor = (
             (g.crawl.stall_time, g.crawl.turn_floor)
@@ -288,6 +303,30 @@ class Go1Body:
         timeout = 2.0 + abs(theta) / floor
         result = self._run("turn", theta, command, timeout, on_tick)
         return replace(result, timed_out=True) if command.stall.stalled else result
+
+    def meets_step(self, distance: float | None = None, heading: float | None = None) -> bool:
+        """Whether a walk of ``distance`` m (None: a turn in place) from here meets a step.
+
+        See :func:`~havln_mj.robot.go1.steps.meets_step`; ``heading`` is the walk's (rad;
+        default the robot's).
+        """
+        p = self.true_pose()
+        yaw = p.yaw if heading is None else const.HALF_PI - heading
+        return steps.meets_step(self.scan, self.gains.crawl, p.x, p.y, p.z, yaw, distance)
+
+    def crawls(self, distance: float | None, heading: float | None = None) -> bool:
+        """Whether that walk (or turn, ``distance`` None) would be the crawl's.
+
+        Always with ``"crawl"``, never with the trots; with ``"hybrid"`` where it
+        :meth:`meets_step`.
+        """
+        return self.meets_step(distance, heading) if self.hybrid else self.crawl
+
+    def _choose_gait(self, distance: float | None) -> None:
+        """The hybrid's gait for the next primitive (a switch happens standing)."""
+        if self.hybrid and self.crawls(distance) != self.crawl:
+            self.crawl = not self.crawl
+            self.gait = self._new_gait()
 
     # ------------------------------------------------------------- the loop
 
