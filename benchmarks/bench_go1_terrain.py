@@ -22,8 +22,8 @@
 Prints one JSON object. Run:
 ``python benchmarks/bench_go1_terrain.py [--walks 100] [--parts courses,seams,proxy]
 [--controller crawl] [--risers 12] [--proxy-edges N] [--floor-primitives 1000]``. The crawl
-walks the stair courses down backwards (facing up the stair, ``forward`` of minus the
-distance).
+and the hybrid walk the stair courses down backwards (facing up the stair, ``forward`` of
+minus the distance).
 """
 
 from __future__ import annotations

@@ -246,3 +246,48 @@ def test_a_move_that_stalls_short_never_reports_the_target(tmp_path, edge, graph
     assert not state.arrived and state.location.viewpointId == a
     assert np.hypot(*(state.pose[:2] - pb[:2])) > 1.0
     assert sim.getGeodesicDistance([b])[0] > 1.0  # measured from where it stands
+
+
+@pytest.mark.parametrize("controller", ["trot", "crawl", "hybrid"])
+def test_go_to_turns_the_crawls_back_to_a_stair_it_descends(graph, edge, controller):
+    # The robot stands on a platform two risers above the floor at a; b lies down a stair of
+    # two risers. The crawl and the hybrid (which crawls over the risers) turn their backs to
+    # b and walk backwards; the trot faces b. Primitives are recorded, not walked.
+    from havln_mj.scene.boxes import BoxSet
+
+    a, b, h = edge
+    pa, pb = graph.position(a), graph.position(b)
+    floor = graph.floor_z(a)
+    u = (pb[:2] - pa[:2]) / np.hypot(*(pb[:2] - pa[:2]))
+    steps = [(pa[:2], 0.5, 0.34), (pa[:2] + 0.8 * u, 0.3, 0.17)]  # centre, half side, top
+    lo = [[*(c - r), floor] for c, r, _ in steps]
+    hi = [[*(c + r), floor + top] for c, r, top in steps]
+    scan = load_scan(SCAN)
+    boxes = BoxSet(
+        np.vstack([scan.boxes.lo, lo]),
+        np.vstack([scan.boxes.hi, hi]),
+        (*scan.boxes.kind, "floor", "floor"),
+        (*scan.boxes.material, "test_step", "test_step"),
+        np.vstack([scan.boxes.rgba, np.ones((2, 4))]),
+    )
+    scan = dataclasses.replace(scan, boxes=boxes)
+    world = LeggedWorld(
+        scan, WorldOptions(collision="boxes"), NO_CROWD, LeggedOptions(controller=controller)
+    )
+    agent = LeggedAgent(world)
+    agent.place(pa, floor + 0.34, h, 0.0)
+    calls = []
+
+    def record(kind):
+        def primitive(amount, on_tick=None):
+            calls.append((kind, amount))
+
+        return primitive
+
+    agent.body.turn, agent.body.forward = record("turn"), record("forward")
+    agent.go_to(np.append(pb[:2], floor), None, 0.0)
+    (_, turn), (_, forward) = calls[:2]
+    backwards = controller != "trot"
+    assert abs(abs(turn) - math.pi) < 0.2 if backwards else abs(turn) < 0.2
+    assert (forward < 0) == backwards
+    assert abs(abs(forward) - np.hypot(*(pb[:2] - pa[:2]))) < 0.1

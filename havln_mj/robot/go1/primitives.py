@@ -63,8 +63,9 @@ class Go1Body:
             it climbs stairs walking forwards and descends them walking backwards, at its own
             slow pace), or ``"hybrid"`` (the trot on level ground, the crawl for a primitive
             whose walk or turn meets a step or a slope, :mod:`~havln_mj.robot.go1.steps`).
-            Except with ``"trot"``, :meth:`reset` stands the robot on the ground as it is
-            (a stair, a ramp).
+            With ``"terrain"`` and ``"learned"``, :meth:`reset` stands the robot on the
+            ground as it is (a stair, a ramp); so does the crawl's where the ground under it
+            has a step.
         policy: The learned controller's policy (default: the shipped
             ``robots/go1/policy.npz``), or only its
             :class:`~havln_mj.robot.go1.learned.observation.PolicySpec` for a trainer that
