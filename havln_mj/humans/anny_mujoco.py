@@ -161,7 +161,9 @@ def add_anny_pieces(
 
     ``texel_limit``: most texels per metre the clothes texture keeps (None: its full size).
     """
-    mesh, rig = look.mesh, look.rig
+    # Made for this build, not kept on the look: once compiled, the pieces need none of its
+    # arrays (several MB a person), unlike a skinned body that re-skins them every frame.
+    mesh, rig = person_mesh(look), look.rig
     material = _add_material(spec, prefix, look, mesh, texel_limit)
     normals = vertex_normals(mesh.rest, mesh.faces)
     for piece in rigid_pieces(mesh.weights, mesh.faces):
