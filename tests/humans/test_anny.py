@@ -160,3 +160,8 @@ def test_rigid_pieces_keep_no_mesh_on_the_look_and_fit_their_texture():
     spec = mujoco.MjSpec()
     add_anny_skinned(spec, "p", spec.worldbody.add_body(mocap=True), look, -100.0)
     assert "mesh" in look.__dict__
+
+
+def test_the_catalog_keeps_its_texel_maps_as_stored():
+    topology = CATALOG.topology
+    assert topology.texel_face.dtype == np.int16 and topology.texel_bary.dtype == np.float16
