@@ -6,11 +6,11 @@ surface at more texels per metre than that is only ever sampled through its coar
 levels, yet its full size is kept twice: in the model (``tex_data``) and, with its mipmaps,
 by the OpenGL driver (a CPU renderer holds it in host memory, as RGBA). So the world builder
 halves such a texture (2×2 box filter, the mipmap's own rule) until its density on the
-surfaces using it is at most the camera's at :data:`REACH_M`: the distance the camera
-seldom sees a surface closer than (its height over the floor; people nearer than that are
-inside the collision distance). At 640×480 and 60° that is 277 texels per metre; the built-in
-houses' floor, clothes and picture textures drop from 512 or 256 to 256 or 128 texels a
-side, and frames change by well under one grey level on average.
+surfaces using it is at most the camera's at :data:`REACH_M`: about the camera's height
+over the floor, nearer than which it seldom sees a surface. At 640×480 and 60° that is 277
+texels per metre; the built-in houses' floor, clothes and picture textures drop from 512 or
+256 to 256, 128 or 64 texels a side, and frames change by under one grey level on average
+(a wall seen from closer than the reach looks slightly softer side by side).
 
 The density of a texture is measured on its surfaces: ``sqrt(texel area / surface area)``,
 summing each triangle's area in texture space (in texels, repeats included) and in metres.
@@ -23,10 +23,10 @@ import math
 import numpy as np
 
 REACH_M = 1.5
-"""Metres: textures keep the detail a frame resolves on a surface this far away."""
+"""The distance in metres at which textures keep the detail a frame resolves."""
 
 MIN_SIZE = 8
-"""Texels: a texture is never halved below this many on its shorter side."""
+"""The fewest texels on a texture's shorter side that halving leaves."""
 
 
 def resolved_density(height_px: int, vfov_deg: float, reach_m: float = REACH_M) -> float:
