@@ -23,6 +23,7 @@ from havln_mj.humans.anny_rig import AnnyRig, rigid_pieces
 from havln_mj.humans.outfits import Outfit, hair_layer, paint, skirt_mesh
 from havln_mj.humans.skeleton import JOINT_NAMES
 from havln_mj.humans.skinned import vertex_normals
+from havln_mj.render.texels import halvings, shrink, surface_areas
 
 _MESH = mujoco.mjtGeom.mjGEOM_MESH
 
@@ -121,8 +122,13 @@ def _add_mesh(
     mesh.inertia = mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL  # open surfaces are fine
 
 
-def _add_material(spec: mujoco.MjSpec, prefix: str, look: AnnyLook) -> str:
+def _add_material(
+    spec: mujoco.MjSpec, prefix: str, look: AnnyLook, mesh: PersonMesh, texel_limit: float | None
+) -> str:
     image = paint(look.rig.body, look.outfit, look.seed)
+    if texel_limit is not None:  # clothes finer than the camera resolves are halved
+        areas = surface_areas(mesh.rest[mesh.render_vertex], mesh.render_faces, mesh.uv)
+        image = shrink(image, halvings(image.shape, *areas, texel_limit))
     tex = spec.add_texture(
         name=f"{prefix}/skin_tex",
         type=mujoco.mjtTexture.mjTEXTURE_2D,
@@ -145,11 +151,20 @@ def _geom(body: mujoco.MjsBody, name: str, mesh: str, **kw: object) -> None:
 
 
 def add_anny_pieces(
-    spec: mujoco.MjSpec, prefix: str, joint_bodies: list[mujoco.MjsBody], look: AnnyLook
+    spec: mujoco.MjSpec,
+    prefix: str,
+    joint_bodies: list[mujoco.MjsBody],
+    look: AnnyLook,
+    texel_limit: float | None = None,
 ) -> None:
-    """Adds ``look``'s rigid pieces (and skirt) to the person's 24 joint bodies."""
-    mesh, rig = look.mesh, look.rig
-    material = _add_material(spec, prefix, look)
+    """Adds ``look``'s rigid pieces (and skirt) to the person's 24 joint bodies.
+
+    ``texel_limit``: most texels per metre the clothes texture keeps (None: its full size).
+    """
+    # Made for this build, not kept on the look: once compiled, the pieces need none of its
+    # arrays (several MB a person), unlike a skinned body that re-skins them every frame.
+    mesh, rig = person_mesh(look), look.rig
+    material = _add_material(spec, prefix, look, mesh, texel_limit)
     normals = vertex_normals(mesh.rest, mesh.faces)
     for piece in rigid_pieces(mesh.weights, mesh.faces):
         faces = mesh.render_faces[piece.faces]
@@ -179,11 +194,19 @@ def skinned_body_name(prefix: str) -> str:
 
 
 def add_anny_skinned(
-    spec: mujoco.MjSpec, prefix: str, pelvis: mujoco.MjsBody, look: AnnyLook, park_z: float
+    spec: mujoco.MjSpec,
+    prefix: str,
+    pelvis: mujoco.MjsBody,
+    look: AnnyLook,
+    park_z: float,
+    texel_limit: float | None = None,
 ) -> None:
-    """Adds ``look`` as one mesh (rest pose) on its own mocap body, re-skinned every frame."""
+    """Adds ``look`` as one mesh (rest pose) on its own mocap body, re-skinned every frame.
+
+    ``texel_limit``: most texels per metre the clothes texture keeps (None: its full size).
+    """
     mesh = look.mesh
-    material = _add_material(spec, prefix, look)
+    material = _add_material(spec, prefix, look, mesh, texel_limit)
     rest = mesh.rest[mesh.render_vertex]
     normals = vertex_normals(mesh.rest, mesh.faces)[mesh.render_vertex]
     name = skinned_body_name(prefix)

@@ -51,6 +51,7 @@ def add_people(
     skins: Sequence[Skin | None] = (),
     solid: bool = False,
     style: str = "pieces",
+    texel_limit: float | None = None,
 ) -> None:
     """Adds the mocap bodies and geoms of ``shapes`` (person k = ``shapes[k]``) to ``spec``.
 
@@ -58,7 +59,8 @@ def add_people(
     their joint bodies carry no geoms. A shape with an Anny look is drawn as ``style`` says
     (:data:`DRAW_STYLES`). ``solid`` makes the capsule geoms collide (``contype =
     conaffinity = 1``), so they push a simulated robot; it must be chosen before compiling,
-    since MuJoCo aggregates contact bits per body then.
+    since MuJoCo aggregates contact bits per body then. ``texel_limit`` caps the texels per
+    metre of the Anny clothes textures (:mod:`havln_mj.render.texels`; None: full size).
 
     Raises:
         InvalidArgumentError: ``style`` is not one of :data:`DRAW_STYLES`.
@@ -81,9 +83,9 @@ def add_people(
             for j in range(NUM_JOINTS)
         ]
         if look is not None and style == "pieces":
-            add_anny_pieces(spec, f"human{k}", bodies, look)
+            add_anny_pieces(spec, f"human{k}", bodies, look, texel_limit)
         elif look is not None:
-            add_anny_skinned(spec, f"human{k}", bodies[0], look, PARK_Z)
+            add_anny_skinned(spec, f"human{k}", bodies[0], look, PARK_Z, texel_limit)
         alpha = 0.0 if look is not None and not filler else 1.0  # skinned: contacts only
         for j, body in enumerate(bodies):
             for i, piece in enumerate(p for p in pieces if p.joint == j):

@@ -8,6 +8,7 @@ when it is asked for.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.sim.body import BodyKind
@@ -46,9 +47,9 @@ def make_kind(
         from havln_mj.sim.point import PointKind
 
         skybox = cfg.dataset_path if cfg.skybox else None
-        return PointKind(
-            load_scan, cfg.world_options, cfg.cache_size, speed, turn_rate, skybox_root=skybox
-        )
+        # Segmentation is fixed at initialize: without it, worlds need no label meshes.
+        options = cfg.world_options if cfg.labels else replace(cfg.world_options, labels=False)
+        return PointKind(load_scan, options, cfg.cache_size, speed, turn_rate, skybox_root=skybox)
     raise InvalidArgumentError(f"body {name!r} unknown; valid: {', '.join(BODY_KINDS)}")
 
 

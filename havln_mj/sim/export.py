@@ -304,7 +304,8 @@ def export_scene(
         raise InvalidArgumentError(f"together must be a chance in [0, 1], got {together!r}")
     scan = load_scan(scene, mp3d_dir=mp3d_dir, connectivity_dir=connectivity_dir)
     crowd = scene_crowd(scan, seed, human_placements, together) if humans else NO_CROWD
-    options = WorldOptions(collision=collision, people_style=people_style)
+    # Exported files are drawn by other tools at any size: their textures stay whole.
+    options = WorldOptions(collision=collision, people_style=people_style, texel_reach_m=None)
     people = PeopleDrawing(crowd, options.people_style)
     spec = build_spec(scan, people, body, options, viewpoint, solid_people)
     _, position, _ = _start(scan, viewpoint)

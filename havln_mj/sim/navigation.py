@@ -24,7 +24,7 @@ import weakref
 from bisect import bisect_left, bisect_right
 
 from havln_mj.scene.navgraph import NavGraph
-from havln_mj.sim.state import ViewPoint
+from havln_mj.sim.state import ViewPoint, make
 
 _PI = math.pi
 _cos, _hypot = math.cos, math.hypot
@@ -150,7 +150,7 @@ class NavTable:
                 rel = math.fmod(rel + _PI, _TWO_PI)
                 rel = rel - _PI if rel > 0.0 else rel + _PI
             if _cos(rel) >= c:
-                out.append(ViewPoint(j, ix, x, y, z, rel, elev - elevation, dist))
+                out.append(make(ViewPoint, (j, ix, x, y, z, rel, elev - elevation, dist)))
         if len(out) > 2:
             out[1:] = sorted(out[1:], key=_rank)
         return out

@@ -34,6 +34,7 @@ log = logging.getLogger(__name__)
 _PI = math.pi
 _TWO_PI = 2.0 * math.pi
 _outcome = tuple.__new__  # an Outcome without its Python-level constructor (every move)
+_dist, _fmod = math.dist, math.fmod  # (every move)
 
 
 class Stage:
@@ -199,8 +200,8 @@ class GraphPointBody:
             there, move_s = here, 0.0
         else:
             there = self._xyz[target]
-            move_s = math.dist(here, there) / kind.speed
-        dh = math.fmod(heading - self.heading + _PI, _TWO_PI)  # wrap_angle, inlined (hot)
+            move_s = _dist(here, there) / kind.speed
+        dh = _fmod(heading - self.heading + _PI, _TWO_PI)  # wrap_angle, inlined (hot)
         if dh <= 0.0:
             dh += _TWO_PI
         dh -= _PI

@@ -56,6 +56,7 @@ from havln_mj.scene.navgraph import NavGraph
 from havln_mj.sim.actions import (
     check_graph_steps,
     check_robot_action,
+    one_graph_step,
     per_element,
 )
 from havln_mj.sim.batch import WAIT_S, Batch, Element, FilmCallback
@@ -303,8 +304,11 @@ class Simulator(SimulatorSettings, SimulatorExtensions, SimulatorReports):
         batch = self._batch
         if batch is None or not batch.elements:
             self._running()  # raises
-        steps = check_graph_steps(batch.elements, index, heading, elevation)
-        batch.apply(steps)
+        one = one_graph_step(batch.elements, index, heading, elevation)
+        if one is not None:  # a batch of one with plain values (hot)
+            batch.apply_one(*one)
+        else:
+            batch.apply(check_graph_steps(batch.elements, index, heading, elevation))
         self._timers["process"] += _now() - t0
 
     def makeEgoAction(self, action: Sequence[EgoAction | int | str]) -> None:  # noqa: N802

@@ -1,15 +1,58 @@
 """What the simulator reports: MatterSim's ``ViewPoint`` and ``SimState``, plus HA3D's fields.
 
 Attribute names follow MatterSim (camelCase) so agent code written for it runs unchanged. A
-``SimState`` is a snapshot: ``makeAction`` makes new ones instead of changing old ones.
+``SimState`` is a snapshot: ``makeAction`` makes new ones instead of changing old ones. Both
+are read-only records, as MatterSim's are: named tuples underneath, since every action makes
+a state and its navigable locations, and a tuple is made in one call where a class with an
+``__init__`` runs Python code per field (the simulator makes them with :data:`make`). They
+compare by identity, as objects do (a state holds image arrays).
 """
 
 from __future__ import annotations
 
+from collections import namedtuple
+
 import numpy as np
 
+make = tuple.__new__
+"""``make(ViewPoint, (viewpointId, ix, ...))``: a record from all its fields, in order, at once."""
 
-class ViewPoint:
+_ViewPointFields = namedtuple(
+    "_ViewPointFields",
+    ("viewpointId", "ix", "x", "y", "z", "rel_heading", "rel_elevation", "rel_distance"),
+    defaults=(0.0, 0.0, 0.0),
+)
+
+_SimStateFields = namedtuple(
+    "_SimStateFields",
+    (
+        "scanId",
+        "step",
+        "rgb",
+        "depth",
+        "location",
+        "heading",
+        "elevation",
+        "viewIndex",
+        "navigableLocations",
+        "time",
+        "isCrushed",
+        "crushedBy",
+        "minHumanDistance",
+        "humanMask",
+        "pose",
+        "fell",
+        "humanContacts",
+        "arrived",
+        "diverged",
+        "semantic",
+        "instance",
+    ),
+    defaults=(0.0, 0, (), float("inf"), None, None, False, 0, True, False, None, None),
+)
+
+
+class ViewPoint(_ViewPointFields):
     """A viewpoint as seen from the agent.
 
     Attributes:
@@ -25,27 +68,8 @@ class ViewPoint:
         rel_distance: 3-D distance from the agent's camera (metres).
     """
 
-    __slots__ = ("ix", "rel_distance", "rel_elevation", "rel_heading", "viewpointId", "x", "y", "z")
-
-    def __init__(
-        self,
-        viewpointId: str,  # noqa: N803 - MatterSim's name
-        ix: int,
-        x: float,
-        y: float,
-        z: float,
-        rel_heading: float = 0.0,
-        rel_elevation: float = 0.0,
-        rel_distance: float = 0.0,
-    ) -> None:
-        self.viewpointId = viewpointId
-        self.ix = ix
-        self.x = x
-        self.y = y
-        self.z = z
-        self.rel_heading = rel_heading
-        self.rel_elevation = rel_elevation
-        self.rel_distance = rel_distance
+    __slots__ = ()
+    __eq__, __ne__, __hash__ = object.__eq__, object.__ne__, object.__hash__
 
     @property
     def position(self) -> np.ndarray:
@@ -60,7 +84,7 @@ class ViewPoint:
         )
 
 
-class SimState:
+class SimState(_SimStateFields):
     """One batch element's state after ``newEpisode`` or ``makeAction``.
 
     Attributes:
@@ -98,75 +122,8 @@ class SimState:
             each for the life of the scene); None unless segmentation is enabled.
     """
 
-    __slots__ = (
-        "arrived",
-        "crushedBy",
-        "depth",
-        "diverged",
-        "elevation",
-        "fell",
-        "heading",
-        "humanContacts",
-        "humanMask",
-        "instance",
-        "isCrushed",
-        "location",
-        "minHumanDistance",
-        "navigableLocations",
-        "pose",
-        "rgb",
-        "scanId",
-        "semantic",
-        "step",
-        "time",
-        "viewIndex",
-    )
-
-    def __init__(
-        self,
-        scanId: str,  # noqa: N803 - MatterSim's names
-        step: int,
-        rgb: np.ndarray,
-        depth: np.ndarray,
-        location: ViewPoint,
-        heading: float,
-        elevation: float,
-        viewIndex: int,  # noqa: N803
-        navigableLocations: list[ViewPoint],  # noqa: N803
-        time: float = 0.0,
-        isCrushed: int = 0,  # noqa: N803
-        crushedBy: tuple[int, ...] = (),  # noqa: N803
-        minHumanDistance: float = float("inf"),  # noqa: N803
-        humanMask: np.ndarray | None = None,  # noqa: N803
-        pose: np.ndarray | None = None,
-        fell: bool = False,
-        humanContacts: int = 0,  # noqa: N803
-        arrived: bool = True,
-        diverged: bool = False,
-        semantic: np.ndarray | None = None,
-        instance: np.ndarray | None = None,
-    ) -> None:
-        self.scanId = scanId
-        self.step = step
-        self.rgb = rgb
-        self.depth = depth
-        self.location = location
-        self.heading = heading
-        self.elevation = elevation
-        self.viewIndex = viewIndex
-        self.navigableLocations = navigableLocations
-        self.time = time
-        self.isCrushed = isCrushed
-        self.crushedBy = crushedBy
-        self.minHumanDistance = minHumanDistance
-        self.humanMask = humanMask
-        self.pose = pose
-        self.fell = fell
-        self.humanContacts = humanContacts
-        self.arrived = arrived
-        self.diverged = diverged
-        self.semantic = semantic
-        self.instance = instance
+    __slots__ = ()
+    __eq__, __ne__, __hash__ = object.__eq__, object.__ne__, object.__hash__
 
     def __repr__(self) -> str:
         return (

@@ -6,7 +6,8 @@ no contacts, in the visual geom group. A textured part gets a 2-D texture holdin
 coordinates; the material's colour is the part's ``rgba``, which MuJoCo multiplies with the
 texture. An untextured part keeps its ``rgba`` on the geom, or on a material when it shines or
 glows. Parts that look alike share one material, and an image shared by parts is uploaded
-once.
+once. Given a texel limit, an image finer on its parts than the camera resolves is halved
+first (:mod:`havln_mj.render.texels`).
 
 Texture orientation: :class:`~havln_mj.scene.mesh.MeshPart` stores images top row first and
 UVs in the OBJ convention (``v = 0`` at the image's bottom). MuJoCo puts the first row of a
@@ -26,6 +27,7 @@ import numpy as np
 
 from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
+from havln_mj.render.texels import halvings, shrink, surface_areas
 from havln_mj.scene.mesh import MeshPart
 
 log = logging.getLogger(__name__)
@@ -120,12 +122,30 @@ def _material(
     return name
 
 
+def _texture_halvings(parts: list[MeshPart], limit: float | None) -> dict[int, int]:
+    """id(image) -> how many times it is halved to fit ``limit`` on all the parts using it."""
+    if limit is None:
+        return {}
+    areas: dict[int, list[float]] = {}
+    for part in parts:
+        if part.texture is not None and part.uv is not None:
+            vertices, faces = np.asarray(part.vertices), np.asarray(part.faces)
+            _check_part(part, vertices, faces)
+            uv_area, area = surface_areas(vertices, faces, part.uv)
+            sums = areas.setdefault(id(part.texture), [0.0, 0.0])
+            sums[0] += uv_area
+            sums[1] += area
+    shapes = {id(p.texture): p.texture.shape for p in parts if p.texture is not None}
+    return {key: halvings(shapes[key], uv, a, limit) for key, (uv, a) in areas.items()}
+
+
 def add_visual_parts(
     spec: mujoco.MjSpec,
     parts: list[MeshPart],
     *,
     group: int = groups.VISUAL,
     emission: float = 0.0,
+    texel_limit: float | None = None,
 ) -> int:
     """Adds mesh parts to the world body as non-colliding visual geoms.
 
@@ -136,6 +156,8 @@ def add_visual_parts(
         emission: Least emission of textured materials (0 lets the scene's lights alone shade
             them; scan textures already hold baked lighting, so a higher value with dimmer
             lights looks closer to the photographs).
+        texel_limit: Most texels per metre a texture keeps on its parts (see
+            :func:`havln_mj.render.texels.resolved_density`); None keeps every texture.
 
     Returns:
         The number of geoms added, one per part, less the parts skipped for having no
@@ -146,6 +168,7 @@ def add_visual_parts(
     """
     textures: dict[int, str] = {}  # id(image) -> texture name; shared images upload once
     materials: dict[tuple, str] = {}
+    halved = _texture_halvings(parts, texel_limit)
     added = 0
     for k, part in enumerate(parts):
         name = f"visual/{k}_{safe_name(part.name)}"
@@ -172,7 +195,7 @@ def add_visual_parts(
             texture = textures.get(id(part.texture))
             if texture is None:
                 texture = textures[id(part.texture)] = f"visual/tex{len(textures)}"
-                _add_texture(spec, texture, part.texture)
+                _add_texture(spec, texture, shrink(part.texture, halved.get(id(part.texture), 0)))
         if texture is not None or part.shine > 0.0 or part.emission > 0.0:
             geom["material"] = _material(spec, part, texture, emission, materials)
         else:

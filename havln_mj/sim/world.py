@@ -25,6 +25,7 @@ import numpy as np
 from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
 from havln_mj.render.labels import add_label_meshes, label_people
+from havln_mj.render.texels import REACH_M, resolved_density
 from havln_mj.robot.point_body import add_point_body
 from havln_mj.scene.collision import CoacdParams, decompose
 from havln_mj.scene.matterport.labelmesh import scan_label_meshes
@@ -58,6 +59,11 @@ class WorldOptions:
         people_style: How people are drawn: ``"pieces"`` (dressed bodies as rigid pieces
             on their joints; the default, no per-frame upload), ``"skinned"`` (the same
             bodies skinned every frame) or ``"capsules"`` (mannequins).
+        texel_reach_m: Textures keep the detail an ``offscreen``-sized frame at ``vfov_deg``
+            resolves on a surface this far away (metres); finer ones are halved at build
+            (:mod:`havln_mj.render.texels`). None keeps every texture as it is.
+        labels: Whether the scan's label meshes are built (segmentation needs them); a
+            world that never renders labels leaves out this copy of the building.
     """
 
     collision: str = "auto"
@@ -67,6 +73,8 @@ class WorldOptions:
     offscreen: tuple[int, int] = (640, 480)
     vfov_deg: float = 60.0
     people_style: str = "pieces"
+    texel_reach_m: float | None = REACH_M
+    labels: bool = True
 
     def __post_init__(self) -> None:
         if self.collision not in COLLISION_MODES:
@@ -79,6 +87,17 @@ class WorldOptions:
             raise InvalidArgumentError(
                 f"people style {self.people_style!r} unknown; valid: {', '.join(DRAW_STYLES)}"
             )
+        reach = self.texel_reach_m
+        if reach is not None and not (isinstance(reach, int | float) and reach > 0.0):
+            raise InvalidArgumentError(
+                f"texel_reach_m must be a positive number of metres or None, got {reach!r}"
+            )
+
+    def texel_limit(self) -> float | None:
+        """Texels per metre a texture keeps at most (None: textures are kept as they are)."""
+        if self.texel_reach_m is None:
+            return None
+        return resolved_density(int(self.offscreen[1]), self.vfov_deg, self.texel_reach_m)
 
 
 @dataclass(frozen=True)
@@ -230,8 +249,9 @@ def world_spec(scan: Scan, options: WorldOptions | None = None) -> tuple[mujoco.
             specular=(0.0, 0.0, 0.0),
             castshadow=False,
         )
-    add_visual_parts(spec, merge_by_look(scan.mesh_parts))
-    add_label_meshes(spec, scan_label_meshes(scan))
+    add_visual_parts(spec, merge_by_look(scan.mesh_parts), texel_limit=options.texel_limit())
+    if options.labels:
+        add_label_meshes(spec, scan_label_meshes(scan))
     mode = options.collision
     if mode == "auto":
         mode = "boxes" if scan.boxes is not None else "coacd"
@@ -271,7 +291,9 @@ def build_world(
     t0 = time.perf_counter()
     options = options or WorldOptions()
     spec, mode, n = world_spec(scan, options)
-    add_people(spec, list(people), skins, style=options.people_style)
+    add_people(
+        spec, list(people), skins, style=options.people_style, texel_limit=options.texel_limit()
+    )
     label_people(spec)
     model = spec.compile()
     return World(model, scan, mode, n, time.perf_counter() - t0)

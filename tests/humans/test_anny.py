@@ -7,7 +7,7 @@ import pytest
 from havln_mj import groups
 from havln_mj.humans import rotations as rot
 from havln_mj.humans.anny_data import load_anny_catalog
-from havln_mj.humans.anny_mujoco import AnnyLook
+from havln_mj.humans.anny_mujoco import AnnyLook, add_anny_pieces, add_anny_skinned
 from havln_mj.humans.anny_rig import fit, rigid_pieces
 from havln_mj.humans.body import BodyShape
 from havln_mj.humans.catalog import load_catalog, make_clip
@@ -16,6 +16,7 @@ from havln_mj.humans.drawing import PeopleDrawing
 from havln_mj.humans.outfits import BOTTOM, SKIN, TOP, paint, part_labels, random_outfit
 from havln_mj.humans.skeleton import JOINT, PARENTS
 from havln_mj.paths import asset_path
+from havln_mj.render.texels import resolved_density
 
 CATALOG = load_anny_catalog()
 
@@ -139,3 +140,28 @@ def test_people_appear_in_rgb_depth_and_mask(style):
     assert 2.6 < np.median(depth) < 3.3
     assert (frame.depth[~mask] == 0).all()  # nothing else in this world in view
     assert frame.rgb[mask].mean() > 20 and frame.rgb[~mask].max() == 0
+
+
+def test_rigid_pieces_keep_no_mesh_on_the_look_and_fit_their_texture():
+    # Pieces are made for the build and let go: a skinned body keeps its mesh to re-skin it.
+    rig = fit(CATALOG.get("man-average"))
+    look = AnnyLook(rig, random_outfit(np.random.default_rng(1), rig.body))
+
+    def bodies(spec):
+        return [spec.worldbody.add_body(mocap=True) for _ in range(len(JOINT))]
+
+    spec = mujoco.MjSpec()
+    add_anny_pieces(spec, "p", bodies(spec), look)
+    assert "mesh" not in look.__dict__
+    assert spec.compile().tex_width[0] == 512  # no limit: the painted size
+    spec = mujoco.MjSpec()
+    add_anny_pieces(spec, "p", bodies(spec), look, texel_limit=resolved_density(480, 60.0))
+    assert spec.compile().tex_width[0] < 512
+    spec = mujoco.MjSpec()
+    add_anny_skinned(spec, "p", spec.worldbody.add_body(mocap=True), look, -100.0)
+    assert "mesh" in look.__dict__
+
+
+def test_the_catalog_keeps_its_texel_maps_as_stored():
+    topology = CATALOG.topology
+    assert topology.texel_face.dtype == np.int16 and topology.texel_bary.dtype == np.float16

@@ -328,3 +328,46 @@ def test_rendered_images_in_mattersim_and_plain_formats(graph):
         expected = np.rint(s_rgb.depth[seen] * 4000)
         np.testing.assert_array_equal(s_bgr.depth[seen], expected)
     assert not np.array_equal(bgr[0].rgb, bgr[1].rgb)  # two poses, two images
+
+
+def _fields(state) -> tuple:
+    """A state's fields, images by shape, viewpoints by value."""
+    nav = [tuple(v) for v in state.navigableLocations]
+    shapes = (state.rgb.shape, state.depth.shape)
+    return (*state[:2], shapes, tuple(state.location), *state[5:8], nav, *state[9:])
+
+
+@pytest.mark.parametrize("people", [False, True])
+def test_a_batch_of_one_steps_alike_on_the_plain_and_the_checked_path(people):
+    # Plain one-entry lists take the batch-of-one path; numpy values take the checked path.
+    plain, checked = _sim(humans=people), _sim(humans=people)
+    rng = np.random.default_rng(3)
+    for sim in (plain, checked):
+        sim.newEpisode([SCAN], [""], [1.0], [0.0])
+    for step in range(60):
+        a, b = plain.getState()[0], checked.getState()[0]
+        assert _fields(a) == _fields(b), step
+        k = int(rng.integers(len(a.navigableLocations)))
+        dh, de = float(rng.uniform(-3, 3)), float(rng.uniform(-0.3, 0.3))
+        plain.makeAction([k], [dh], [de])
+        checked.makeAction([np.int64(k)], [np.float64(dh)], np.array([de]))
+    assert plain.getState()[0].step == 60
+
+
+def test_states_and_viewpoints_are_read_only_records_compared_by_identity(graph):
+    import pickle
+
+    sim = _sim()
+    sim.newEpisode([SCAN], [graph.nodes[0]], [0.0], [0.0])
+    state = sim.getState()[0]
+    with pytest.raises(AttributeError):
+        state.heading = 1.0
+    with pytest.raises(AttributeError):
+        state.location.x = 1.0
+    again = pickle.loads(pickle.dumps(state))
+    assert again is not state and again != state  # identity, as objects (images inside)
+    assert again.location.viewpointId == state.location.viewpointId
+    assert again.navigableLocations[0].ix == state.location.ix
+    assert state.location == state.location and hash(state) == hash(state)
+    assert MatterSim.ViewPoint("v", 3, 1.0, 2.0, 3.0).rel_distance == 0.0
+    assert MatterSim.SimState("s", 0, None, None, None, 0.0, 0.0, 0, []).isCrushed == 0

@@ -51,6 +51,25 @@ def test_procedural_world_uses_exact_boxes():
     assert all(names) and len(set(names)) == len(names)
 
 
+def test_label_meshes_are_left_out_of_worlds_that_never_render_labels():
+    scan = load_scan("proc-5")
+    with_labels = build_world(scan, WorldOptions(collision="none")).model
+    without = build_world(scan, WorldOptions(collision="none", labels=False)).model
+    assert (with_labels.geom_group == LABELS).sum() > 0
+    assert (without.geom_group == LABELS).sum() == 0
+    visual = groups.VISUAL
+    assert (without.geom_group == visual).sum() == (with_labels.geom_group == visual).sum()
+
+
+def test_simulator_worlds_have_label_meshes_only_with_segmentation():
+    from havln_mj.sim.bodies import make_kind
+    from havln_mj.sim.settings import Settings
+
+    for labels in (False, True):
+        kind = make_kind("point", load_scan, Settings(labels=labels), 1.0, 1.0, None)
+        assert kind._options.labels is labels
+
+
 def test_bad_collision_mode_is_rejected():
     with pytest.raises(InvalidArgumentError, match="'boxed'"):
         WorldOptions(collision="boxed")
