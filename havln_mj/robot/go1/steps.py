@@ -4,8 +4,9 @@ The hybrid controller trots over level ground and crawls where a walk or a turn 
 (a riser, a stair's nose, a ledge). Both checks read the height scan, as the robot's depth
 camera would see the ground: along a walk, three lines (the centre and each side's feet) are
 sampled every ``SAMPLE`` metres from behind the hind feet to beyond the front feet at the
-end, and the largest rise or drop between neighbouring samples is the walk's step. Under a
-turn the feet sweep a disc around the trunk; its ground is sampled on rings.
+end; the largest rise or drop between neighbouring samples is the walk's step, the steepest
+rise over ``GRADE_WINDOW`` its grade. Under a turn the feet sweep a disc around the trunk;
+its ground is sampled on rings.
 """
 
 from __future__ import annotations
