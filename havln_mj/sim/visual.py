@@ -122,15 +122,18 @@ def _material(
     return name
 
 
-def _texture_halvings(parts: list[MeshPart], limit: float | None) -> dict[int, int]:
-    """id(image) -> how many times it is halved to fit ``limit`` on all the parts using it."""
+def _texture_halvings(
+    parts: list[MeshPart], arrays: list[tuple[np.ndarray, np.ndarray]], limit: float | None
+) -> dict[int, int]:
+    """id(image) -> how many times it is halved to fit ``limit`` on all the parts using it.
+
+    ``arrays`` holds each part's checked ``(vertices, faces)``.
+    """
     if limit is None:
         return {}
     areas: dict[int, list[float]] = {}
-    for part in parts:
+    for part, (vertices, faces) in zip(parts, arrays, strict=True):
         if part.texture is not None and part.uv is not None:
-            vertices, faces = np.asarray(part.vertices), np.asarray(part.faces)
-            _check_part(part, vertices, faces)
             uv_area, area = surface_areas(vertices, faces, part.uv)
             sums = areas.setdefault(id(part.texture), [0.0, 0.0])
             sums[0] += uv_area
@@ -168,13 +171,16 @@ def add_visual_parts(
     """
     textures: dict[int, str] = {}  # id(image) -> texture name; shared images upload once
     materials: dict[tuple, str] = {}
-    halved = _texture_halvings(parts, texel_limit)
-    added = 0
-    for k, part in enumerate(parts):
-        name = f"visual/{k}_{safe_name(part.name)}"
-        vertices = np.asarray(part.vertices, dtype=np.float32)
-        faces = np.asarray(part.faces, dtype=np.int32)
+    arrays = [
+        (np.asarray(part.vertices, dtype=np.float32), np.asarray(part.faces, dtype=np.int32))
+        for part in parts
+    ]
+    for part, (vertices, faces) in zip(parts, arrays, strict=True):
         _check_part(part, vertices, faces)
+    halved = _texture_halvings(parts, arrays, texel_limit)
+    added = 0
+    for k, (part, (vertices, faces)) in enumerate(zip(parts, arrays, strict=True)):
+        name = f"visual/{k}_{safe_name(part.name)}"
         if _area(vertices, faces) < _MIN_AREA:
             log.warning("visual part %d (%r) has no surface; skipped", k, part.name)
             continue
