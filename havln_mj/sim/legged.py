@@ -257,12 +257,19 @@ class LeggedAgent:
         return self.body.true_pose().heading
 
     def place(self, position: np.ndarray, floor_z: float, heading: float, t: float) -> None:
-        """Stands the robot at a viewpoint's floor point, facing ``heading``, at time ``t``."""
+        """Stands the robot at a viewpoint's floor point, facing ``heading``, at time ``t``.
+
+        Physics that diverges while the robot settles there ends the episode as in an action
+        (``diverged``; the pose reported is the floor point's).
+        """
         self.pose_people(t)
-        self.body.reset(float(position[0]), float(position[1]), float(floor_z), heading)
-        self.fell = self.body.fallen
-        self.diverged = False
-        self._last_good = None
+        warnings0 = warning_counts(self.data)
+        x, y = float(position[0]), float(position[1])
+        self.body.reset(x, y, float(floor_z), heading)
+        self.diverged = warning_counts(self.data) != warnings0
+        self.fell = self.body.fallen or self.diverged
+        stand = np.array([x, y, float(floor_z) + STAND_HEIGHT])
+        self._last_good = (stand, heading) if self.diverged else None
 
     def pose_people(self, t: float) -> None:
         """Writes the people's poses at simulated time ``t`` into this agent's data."""

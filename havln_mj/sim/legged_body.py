@@ -113,7 +113,7 @@ class LeggedBody:
         g = self.graph
         self.agent.place(g.position(viewpoint), g.floor_z(viewpoint), heading, t)
         track = np.array([[t, *self.agent.position()]])
-        walk = WalkResult(0.0, self.agent.fell, False, 0, [], track)
+        walk = WalkResult(0.0, self.agent.fell, self.agent.diverged, 0, [], track)
         return self._outcome(walk, viewpoint, True)
 
     def move(

@@ -291,3 +291,23 @@ def test_go_to_turns_the_crawls_back_to_a_stair_it_descends(graph, edge, control
     assert abs(abs(turn) - math.pi) < 0.2 if backwards else abs(turn) < 0.2
     assert (forward < 0) == backwards
     assert abs(abs(forward) - np.hypot(*(pb[:2] - pa[:2]))) < 0.1
+
+
+def test_physics_diverging_while_the_robot_is_placed_ends_the_episode(graph, edge):
+    a, _, h = edge
+    agent = LeggedAgent(
+        LeggedWorld(load_scan(SCAN), WorldOptions(collision="boxes"), NO_CROWD, LeggedOptions())
+    )
+    stand = agent.body.stand
+
+    def diverging_stand(seconds, **kw):
+        agent.data.qvel[:] = np.nan  # MuJoCo resets the state and counts a warning
+        return stand(seconds, **kw)
+
+    agent.body.stand = diverging_stand
+    agent.place(graph.position(a), graph.floor_z(a), h, 0.0)
+    assert agent.diverged and agent.fell
+    np.testing.assert_allclose(agent.position()[:2], graph.position(a)[:2])
+    agent.body.stand = stand
+    agent.place(graph.position(a), graph.floor_z(a), h, 0.0)
+    assert not agent.diverged and not agent.fell
