@@ -6,13 +6,12 @@ import json
 import math
 from pathlib import Path
 
-import mujoco
 import numpy as np
 import pytest
 
 from havln_mj.errors import InvalidArgumentError
-from havln_mj.robot.go1 import Go1Body, add_go1, load_gains
 from havln_mj.robot.go1 import constants as const
+from havln_mj.robot.go1 import load_gains
 from havln_mj.robot.go1.courses import START_X, stairs_spec
 from havln_mj.robot.go1.gains import CrawlGains
 from havln_mj.robot.go1.stance_forces import F_MIN, distribute, support_margin, support_target
@@ -26,13 +25,11 @@ FEET = {
 }
 
 
-def _crawler(riser: float = 0.17, risers: int = 4) -> tuple[Go1Body, object]:
-    spec, course = stairs_spec(riser=riser, tread=0.28, risers=risers)
-    add_go1(spec)
-    model = spec.compile()
-    data = mujoco.MjData(model)
-    mujoco.mj_forward(model, data)  # geometry in place for the height scan
-    return Go1Body(model, data, controller="crawl"), course
+@pytest.fixture
+def crawler(go1_on):
+    """A crawling GO1 before 4 risers of 0.17 m, and the course."""
+    spec, course = stairs_spec(riser=0.17, tread=0.28, risers=4)
+    return go1_on(spec, "crawl"), course
 
 
 def test_stance_forces_carry_the_weight_without_a_moment_within_friction() -> None:
@@ -67,8 +64,8 @@ def test_the_support_target_lies_inside_the_triangle_ahead_of_its_centroid() -> 
     assert support_margin(np.array([1.0, 0.0, 0.0]), triangle) < 0
 
 
-def test_footholds_keep_off_the_noses_and_the_risers() -> None:
-    body, _ = _crawler()
+def test_footholds_keep_off_the_noses_and_the_risers(crawler) -> None:
+    body, _ = crawler
     g = body.gains.crawl
     walk = np.array([1.0, 0.0, 0.0])
     for x in np.arange(-0.2, 0.8, 0.01):
@@ -94,8 +91,8 @@ def test_crawl_gains_are_checked_and_read_from_the_gains_file(tmp_path: Path) ->
 
 @pytest.mark.slow
 @pytest.mark.parametrize("down", [False, True], ids=["up", "down backwards"])
-def test_the_crawl_climbs_and_descends_four_risers_of_017(down: bool) -> None:
-    body, course = _crawler()
+def test_the_crawl_climbs_and_descends_four_risers_of_017(crawler, down: bool) -> None:
+    body, course = crawler
     start, goal = (course.top_x, START_X) if down else (START_X, course.top_x)
     # Facing up the stair both ways: it descends walking backwards.
     body.reset(start, 0.03, course.rise if down else 0.0, math.pi / 2 + 0.05)

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import math
 
-import mujoco
 import pytest
 
-from havln_mj.robot.go1 import Go1Body, add_go1
+from havln_mj.robot.go1 import Go1Body
 from havln_mj.robot.go1 import constants as const
 from havln_mj.robot.go1.courses import START_X, flat_floor_spec, stairs_spec
 from havln_mj.robot.go1.steps import largest_step, steepest
@@ -15,17 +14,15 @@ from havln_mj.robot.go1.steps import largest_step, steepest
 FACING_UP = math.pi / 2  # heading of +x, up the course's stair
 
 
-def _body(spec: mujoco.MjSpec, controller: str = "hybrid") -> Go1Body:
-    add_go1(spec)
-    model = spec.compile()
-    data = mujoco.MjData(model)
-    mujoco.mj_forward(model, data)  # geometry in place for the height scan
-    return Go1Body(model, data, controller=controller)
+@pytest.fixture
+def stair_body(go1_on):
+    """``stair_body(controller)``: a GO1 before 4 risers of 0.17 m, and the course."""
 
+    def make(controller: str = "hybrid") -> tuple[Go1Body, object]:
+        spec, course = stairs_spec(riser=0.17, tread=0.28, risers=4)
+        return go1_on(spec, controller), course
 
-def _stair_body(controller: str = "hybrid") -> tuple[Go1Body, object]:
-    spec, course = stairs_spec(riser=0.17, tread=0.28, risers=4)
-    return _body(spec, controller), course
+    return make
 
 
 def test_steps_skip_walls_and_holes_and_grades_are_rise_over_run() -> None:
@@ -38,8 +35,10 @@ def test_steps_skip_walls_and_holes_and_grades_are_rise_over_run() -> None:
     assert steepest([0.0] * 5 + [0.17] * 20, 0.02) == pytest.approx(0.17 / 0.2)
 
 
-def test_the_hybrid_crawls_where_a_walk_or_turn_meets_a_riser_and_trots_elsewhere() -> None:
-    body, _ = _stair_body()
+def test_the_hybrid_crawls_where_a_walk_or_turn_meets_a_riser_and_trots_elsewhere(
+    stair_body,
+) -> None:
+    body, _ = stair_body()
     body.reset(START_X, 0.0, 0.0, FACING_UP)
     assert not body.crawl  # level ground all round: it stands as the trot
     assert body.meets_step(1.0) and body.crawls(1.0)  # up to the first riser and over it
@@ -51,13 +50,13 @@ def test_the_hybrid_crawls_where_a_walk_or_turn_meets_a_riser_and_trots_elsewher
     body.reset(-0.1, 0.0, 0.0, FACING_UP)
     assert body.meets_step(None)  # the front feet sweep over the first riser
     assert body.crawl  # and the hybrid stands there as the crawl
-    trot, _ = _stair_body("trot")
+    trot, _ = stair_body("trot")
     trot.reset(-0.1, 0.0, 0.0, FACING_UP)
     assert not trot.crawls(None) and not trot.crawls(1.0)
 
 
-def test_the_hybrid_walks_level_ground_as_the_trot_does() -> None:
-    hybrid, trot = _body(flat_floor_spec()), _body(flat_floor_spec(), "trot")
+def test_the_hybrid_walks_level_ground_as_the_trot_does(go1_on) -> None:
+    hybrid, trot = go1_on(flat_floor_spec(), "hybrid"), go1_on(flat_floor_spec(), "trot")
     results = []
     for body in (hybrid, trot):
         body.reset(0.0, 0.0, 0.0, 0.3)
@@ -69,8 +68,8 @@ def test_the_hybrid_walks_level_ground_as_the_trot_does() -> None:
 
 
 @pytest.mark.slow
-def test_the_hybrid_turns_as_the_trot_and_climbs_as_the_crawl() -> None:
-    body, course = _stair_body()
+def test_the_hybrid_turns_as_the_trot_and_climbs_as_the_crawl(stair_body) -> None:
+    body, course = stair_body()
     body.reset(START_X, 0.02, 0.0, -FACING_UP)  # its back to the stair
     turn = body.turn(math.pi)
     assert not body.crawl and not turn.fell and turn.duration < 6.0

@@ -221,9 +221,12 @@ class Go1Body:
             d.qvel[da] = 0.0
         self._write_ctrl(home)
         mujoco.mj_forward(m, d)
-        self._choose_gait(None)
-        # Stand on the ground as it is (a stair, a ramp): the crawl only where it is uneven.
-        if self.terrain or (self.crawl and self.meets_step()):
+        # Stand on the ground as it is (a stair, a ramp): the crawl only where it is uneven,
+        # which is also where the hybrid crawls.
+        uneven = (self.crawl or self.hybrid) and self.meets_step()
+        if self.hybrid:
+            self._use_crawl(uneven)
+        if self.terrain or uneven:
             top = z_floor + const.STAND_HEIGHT
             if self.terrain:
                 z, pitch, home = self.gait.standing_pose(x, y, yaw, top)
@@ -273,7 +276,8 @@ class Go1Body:
         stands again, on a fall, or after ``2 + |distance| / forward_v_min`` seconds.
         """
         distance = _check_finite("distance", distance, MAX_DISTANCE)
-        self._choose_gait(distance)
+        if self.hybrid:
+            self._use_crawl(self.meets_step(distance))
         g = self.gains
         v_max = g.odometry_v_max if self.estimate == "odometry" else g.forward_v_max
         stall, floor = (
@@ -293,7 +297,8 @@ class Go1Body:
         robot stands again, on a fall, or after ``2 + |theta| / turn_w_min`` seconds.
         """
         theta = _check_finite("theta", theta, MAX_TURN)
-        self._choose_gait(None)
+        if self.hybrid:
+            self._use_crawl(self.meets_step())
         g = self.gains
         stall, floor = (
             (g.crawl.stall_time, g.crawl.turn_floor)
@@ -323,10 +328,10 @@ class Go1Body:
         """
         return self.meets_step(distance, heading) if self.hybrid else self.crawl
 
-    def _choose_gait(self, distance: float | None) -> None:
+    def _use_crawl(self, crawl: bool) -> None:
         """The hybrid's gait for the next primitive (a switch happens standing)."""
-        if self.hybrid and self.crawls(distance) != self.crawl:
-            self.crawl = not self.crawl
+        if crawl != self.crawl:
+            self.crawl = crawl
             self.gait = self._new_gait()
 
     # ------------------------------------------------------------- the loop
