@@ -11,6 +11,10 @@
   ``mj_step`` time for the same steps), and the real-time factor of the robot walking in the
   procedural house ``proc-0`` (collision boxes) with 4 mocap capsule "people" moved every tick.
 * **Cruise**: walking speed over the middle 1.5 m of 3 m forward primitives.
+* **Graph walks**: what a graph action asks of the robot on a flat floor: episodes of 4 turns
+  to a bearing drawn in (−π, π] each followed by a walk of 0.5–4.5 m, from a random start
+  heading. Falls (turns and walks), distance error, mean speed of a walk. ``--forward-accel``
+  changes how fast a walk may speed up (``Go1Gains.forward_accel``; 1e9: at once).
 * **Stairs**: climbing edges of a real building's graph proxy (``--stairs-scan``), walked both
   ways; with ``--stairs-flights`` the edges walked along a flight drawn for them.
 
@@ -93,6 +97,38 @@ def _cruise(walks: int, seed: int) -> dict:
         "cruise_m_per_s": _stats(speeds, digits=3),
         "distance_error_3m_m": _stats(errors),
         "forward_v_max": GAINS[0].forward_v_max,
+    }
+
+
+def _graph_walks(episodes: int, seed: int) -> dict:
+    """Turns to random bearings and walks of 0.5–4.5 m on a flat floor, 4 of each per episode."""
+    _, _, robot = _flat_robot("truth")
+    rng = np.random.default_rng(seed)
+    falls = {"forward": 0, "turn": 0}
+    errors, speeds, walks = [], [], 0
+    for _ in range(episodes):
+        robot.reset(0.0, 0.0, 0.0, float(rng.uniform(0, 2 * math.pi)), settle=0.5)
+        for _ in range(4):
+            turn = robot.turn(float(rng.uniform(-math.pi, math.pi)))
+            if turn.fell:
+                falls["turn"] += 1
+                break
+            distance = float(rng.uniform(0.5, 4.5))
+            walk = robot.forward(distance)
+            walks += 1
+            if walk.fell:
+                falls["forward"] += 1
+                break
+            errors.append(walk.error)
+            speeds.append(walk.distance / walk.duration)
+    return {
+        "episodes": episodes,
+        "walks": walks,
+        "falls": falls,
+        "walks_per_fall": round(walks / max(1, sum(falls.values())), 1),
+        "distance_error_m": _stats(errors),
+        "mean_speed_m_per_s": _stats(speeds, digits=3),
+        "forward_accel": GAINS[0].forward_accel,
     }
 
 
@@ -337,9 +373,13 @@ def main() -> None:
     parser.add_argument("--odometry-primitives", type=int, default=None)
     parser.add_argument("--house-seconds", type=float, default=60.0)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--parts", default="flat,push,odometry,speed,cruise,house,stairs")
+    parser.add_argument("--parts", default="flat,push,odometry,speed,cruise,graph,house,stairs")
+    parser.add_argument("--graph-episodes", type=int, default=100)
     parser.add_argument("--controller", default="trot", choices=("trot", "terrain", "learned"))
     parser.add_argument("--v-max", type=float, default=None, help="forward cruise cap (m/s)")
+    parser.add_argument(
+        "--forward-accel", type=float, default=None, help="fastest a walk speeds up (m/s²)"
+    )
     parser.add_argument(
         "--data",
         type=Path,
@@ -359,7 +399,11 @@ def main() -> None:
     n_odo = args.odometry_primitives or max(10, args.primitives // 5)
     CONTROLLER[0] = args.controller
     gains = load_gains()
-    GAINS.append(gains.with_(forward_v_max=args.v_max) if args.v_max else gains)
+    if args.v_max:
+        gains = gains.with_(forward_v_max=args.v_max)
+    if args.forward_accel:
+        gains = gains.with_(forward_accel=args.forward_accel)
+    GAINS.append(gains)
     out: dict = {"machine": machine(), "controller": args.controller}
     t = time.perf_counter()
     if "flat" in parts:
@@ -372,6 +416,8 @@ def main() -> None:
         out["controller_time"] = _controller_time(args.seed + 3)
     if "cruise" in parts:
         out["flat_cruise"] = _cruise(10, args.seed + 6)
+    if "graph" in parts:
+        out["flat_graph_walks"] = _graph_walks(args.graph_episodes, args.seed + 7)
     if "house" in parts:
         out["house_4_people"] = [
             _house(args.house_seconds, args.seed + 4, physical) for physical in (False, True)

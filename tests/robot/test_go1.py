@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from types import SimpleNamespace
 
 import mujoco
 import numpy as np
@@ -15,6 +16,7 @@ from havln_mj.frames import heading_to
 from havln_mj.paths import asset_path
 from havln_mj.robot.go1 import Go1Body, Go1Gains, add_go1, flat_floor_spec, load_gains
 from havln_mj.robot.go1 import constants as const
+from havln_mj.robot.go1.commands import ForwardCommand
 from havln_mj.robot.go1.kinematics import leg_fk, leg_ik
 
 
@@ -95,6 +97,41 @@ def test_forward_and_turns_reach_targets() -> None:
         assert not res.fell and abs(math.degrees(res.error)) < 3.0
         assert math.hypot(res.distance, res.lateral) < 0.05
     assert body.pose().heading == pytest.approx(1.0, abs=0.1)
+
+
+def test_forward_speeds_up_at_most_forward_accel() -> None:
+    """The walk's commanded speed grows by forward_accel at most; slowing down is not held."""
+    gains = load_gains()
+    body = SimpleNamespace(
+        gains=gains,
+        est=SimpleNamespace(x=0.0, y=0.0, yaw=0.3),
+        data=SimpleNamespace(time=5.0),
+        measured_vx=0.0,
+    )
+    command = ForwardCommand(body, -3.0, gains.forward_v_max)
+    speeds, dt = [], 0.004
+    for _ in range(250):  # 1 s, the trunk left where it stands: the command keeps asking
+        body.data.time += dt
+        vx, vy, _, _ = command(False)
+        speeds.append(-math.hypot(vx, vy))
+    rises = np.diff([0.0, *speeds])
+    assert np.all(rises >= -gains.forward_accel * dt - 1e-12)  # backwards: speeds grow negative
+    assert speeds[0] == pytest.approx(-gains.forward_accel * dt)
+    assert speeds[-1] == pytest.approx(-gains.forward_v_max)
+    body.est.x -= 2.99 * math.cos(0.3)  # nearly there: the P term slows at once
+    body.est.y -= 2.99 * math.sin(0.3)
+    body.data.time += dt
+    vx, vy, _, _ = command(False)
+    assert abs(vx) < gains.forward_v_min + 1e-9
+
+
+def test_long_walk_after_a_wide_turn_stays_up() -> None:
+    """A graph action's turn and walk: asked for cruise speed at once, this trot fell."""
+    body = _robot(heading=5.058)
+    turn = body.turn(1.9348)
+    walk = body.forward(2.546)
+    assert not turn.fell and not walk.fell and not body.is_fallen()
+    assert abs(walk.error) < 0.03 and abs(math.degrees(turn.error)) < 3.0
 
 
 def test_odometry_mode_walks_and_drifts_little() -> None:
@@ -246,3 +283,5 @@ def test_bad_inputs_rejected(tmp_path: Path) -> None:
         Go1Gains(duty=0.95)
     with pytest.raises(InvalidArgumentError, match="tick_period"):
         Go1Gains(tick_period=0.1)
+    with pytest.raises(InvalidArgumentError, match="forward_accel"):
+        Go1Gains(forward_accel=0.0)

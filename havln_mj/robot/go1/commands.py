@@ -1,11 +1,12 @@
 """The outer loops of the GO1's primitives: what trunk twist to ask of the gait, and when to stop.
 
-:class:`ForwardCommand` is P on the remaining distance (clipped to a speed floor and cap)
-while holding the start heading and lateral offset; :class:`TurnCommand` is P on the remaining
-yaw while holding the start position. Each is called once per control step with ``hold``
-(the gentle twist used while the feet come down) and returns ``(vx, vy, wz, done)`` in the
-trunk frame. A :class:`Stall` in each ends a primitive that stops making progress (a robot
-pushing on a wall would otherwise rear up and fall).
+:class:`ForwardCommand` is P on the remaining distance (clipped to a speed floor and cap, and
+speeding up at ``forward_accel`` at most) while holding the start heading and lateral offset;
+:class:`TurnCommand` is P on the remaining yaw while holding the start position. Each is
+called once per control step with ``hold`` (the gentle twist used while the feet come down)
+and returns ``(vx, vy, wz, done)`` in the trunk frame. A :class:`Stall` in each ends a
+primitive that stops making progress (a robot pushing on a wall would otherwise rear up and
+fall).
 """
 
 from __future__ import annotations
@@ -77,6 +78,7 @@ class ForwardCommand:
         self.c0, self.s0 = math.cos(self.yaw0), math.sin(self.yaw0)
         self.sign = 1.0 if distance >= 0 else -1.0
         self.stall = Stall(body.data, stall_seconds, STALL_DISTANCE)
+        self.v, self.t = 0.0, body.data.time  # the speed asked last (from a stand), and when
 
     def __call__(self, hold: bool) -> tuple[float, float, float, bool]:
         """The twist and whether the target is reached."""
@@ -94,6 +96,11 @@ class ForwardCommand:
             v = clip(g.forward_kp * rem, -g.forward_v_min, g.forward_v_min)
         else:
             v = sign * clip(g.forward_kp * abs(rem), g.forward_v_min, self.v_max)
+        t = self.body.data.time
+        step, self.t = g.forward_accel * (t - self.t), t
+        if abs(v) > abs(self.v) + step:  # speeding up: at most forward_accel
+            v = clip(v, self.v - step, self.v + step)
+        self.v = v
         vl = clip(-g.forward_k_lateral * lat, -0.15, 0.15)
         w = clip(-g.forward_k_yaw * dyaw, -0.5, 0.5)
         cd, sd = math.cos(dyaw), math.sin(dyaw)

@@ -247,6 +247,8 @@ class Go1Gains:
         odometry_v_max: Cruise speed cap closed on odometry (m/s): the feet slip more at
             speed, and dead reckoning drifts with them.
         forward_v_min: Speed floor while the target is not reached (m/s).
+        forward_accel: Fastest the commanded speed grows (m/s²): a trot asked for its cruise
+            speed at once pitches and rolls, and a turn or a long walk after that may fall.
         forward_k_lateral: Lateral offset hold gain (1/s).
         forward_k_yaw: Heading hold gain while walking (1/s).
         forward_stop: Stop when this close to the target distance (m).
@@ -280,6 +282,7 @@ class Go1Gains:
     forward_v_max: float = 0.7
     odometry_v_max: float = 0.5
     forward_v_min: float = 0.1
+    forward_accel: float = 1.5
     forward_k_lateral: float = 1.0
     forward_k_yaw: float = 2.0
     forward_stop: float = 0.003
@@ -307,6 +310,11 @@ class Go1Gains:
                 f"foot_depth must be in [0.15, 0.4] m, got {self.foot_depth}"
             )
         _check_decimation(self.control_decimation)
+        if not self.forward_accel > 0.0:
+            raise InvalidArgumentError(
+                f"forward_accel must be > 0 m/s² (the walk would never start), "
+                f"got {self.forward_accel}"
+            )
         if not 0.0 < self.tick_period <= 1.0 / 16.0:
             raise InvalidArgumentError(
                 f"tick_period must be in (0, 1/16] s (on_tick runs at >= 16 Hz), "
