@@ -19,7 +19,7 @@ from dataclasses import replace
 import mujoco
 
 from havln_mj.errors import InvalidArgumentError, did_you_mean
-from havln_mj.frames import wrap_angle, wrap_heading
+from havln_mj.frames import wrap_heading
 from havln_mj.robot.go1 import constants as const
 from havln_mj.robot.go1 import steps
 from havln_mj.robot.go1.commands import STALL_SECONDS, ForwardCommand, TurnCommand, clip
@@ -432,22 +432,11 @@ class Go1Body:
         steps: int,
         timed_out: bool,
     ) -> PrimitiveResult:
-        def measure(p0: Go1Pose, p1: Go1Pose) -> tuple[float, float, float]:
-            c, s = math.cos(p0.yaw), math.sin(p0.yaw)
-            dx, dy = p1.x - p0.x, p1.y - p0.y
-            return c * dx + s * dy, -s * dx + c * dy, -wrap_angle(p1.yaw - p0.yaw)
-
-        along, lat, dh = measure(truth0, self.true_pose())
-        e_along, e_lat, e_dh = measure(est0, self.pose())
-        return PrimitiveResult(
-            kind=kind,
-            target=target,
-            distance=along,
-            lateral=lat,
-            heading_change=dh,
-            est_distance=e_along,
-            est_lateral=e_lat,
-            est_heading_change=e_dh,
+        return PrimitiveResult.between(
+            kind,
+            target,
+            (truth0, self.true_pose()),
+            (est0, self.pose()),
             duration=self.data.time - t0,
             steps=steps,
             fell=self.fallen,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from havln_mj.frames import wrap_angle
@@ -59,3 +60,27 @@ class PrimitiveResult:
         if self.kind == "turn":
             return wrap_angle(self.heading_change - self.target)
         return 0.0
+
+    @classmethod
+    def between(
+        cls,
+        kind: str,
+        target: float,
+        truth: tuple[Go1Pose, Go1Pose],
+        estimate: tuple[Go1Pose, Go1Pose],
+        **rest: float | int | bool,
+    ) -> PrimitiveResult:
+        """The result of a primitive from its start and end poses, true and estimated.
+
+        ``rest`` holds ``duration``, ``steps``, ``fell`` and ``timed_out``.
+        """
+        along, lat, dh = _displacement(*truth)
+        e_along, e_lat, e_dh = _displacement(*estimate)
+        return cls(kind, target, along, lat, dh, e_along, e_lat, e_dh, **rest)
+
+
+def _displacement(p0: Go1Pose, p1: Go1Pose) -> tuple[float, float, float]:
+    """Along and across ``p0``'s heading (m), and the heading change (rad, + right)."""
+    c, s = math.cos(p0.yaw), math.sin(p0.yaw)
+    dx, dy = p1.x - p0.x, p1.y - p0.y
+    return c * dx + s * dy, -s * dx + c * dy, -wrap_angle(p1.yaw - p0.yaw)
