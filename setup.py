@@ -51,5 +51,6 @@ setup(
     cmdclass={"build_py": BuildWithContent, "build_ext": BuildExact},
     ext_modules=[
         Extension("havln_mj.sim._closest", ["havln_mj/sim/_closest.c"], optional=True),
+        Extension("havln_mj.sim._navigable", ["havln_mj/sim/_navigable.c"], optional=True),
     ],
 )

@@ -50,37 +50,6 @@ def check_index(i: int, navigable: Sequence[ViewPoint], k: object) -> int:
     return int(k)
 
 
-def one_graph_step(
-    elements: Sequence, indices: object, headings: object, elevations: object
-) -> tuple[int, float, float] | None:
-    """``(index, dh, de)`` of a batch of one given plain valid values, else None (hot).
-
-    One-entry lists of an int in range and finite floats are what agents pass; anything
-    else (None) goes through :func:`check_graph_steps`, which converts or raises.
-    """
-    if (
-        len(elements) == 1
-        and type(indices) is list
-        and type(headings) is list
-        and type(elevations) is list
-        and len(indices) == 1
-        and len(headings) == 1
-        and len(elevations) == 1
-    ):
-        k, dh, de = indices[0], headings[0], elevations[0]
-        # A float is finite when x - x is 0 (inf - inf and NaN give NaN), with no call.
-        if (
-            type(k) is int
-            and type(dh) is float
-            and type(de) is float
-            and dh - dh == 0.0
-            and de - de == 0.0
-            and 0 <= k < len(elements[0].navigable)
-        ):
-            return k, dh, de
-    return None
-
-
 def check_graph_steps(
     elements: Sequence, indices: object, headings: object, elevations: object
 ) -> list[GraphStep]:
@@ -91,9 +60,6 @@ def check_graph_steps(
         InvalidActionError: An index is out of range or a delta is not finite.
     """
     n = len(elements)
-    one = one_graph_step(elements, indices, headings, elevations)
-    if one is not None:
-        return [(0, *one)]
     if not (type(indices) is list and len(indices) == n):
         indices = per_element("index", indices, n)
     if not (type(headings) is list and len(headings) == n):

@@ -1,7 +1,8 @@
 """The running batch: each element's body, view, clock and state, stepped through the Body seam.
 
-:class:`Batch` is the simulator's runtime (the simulator itself checks the MatterSim API's
-arguments): it starts the elements' bodies, turns graph actions into body moves under the view
+:class:`Batch` is the simulator's runtime (the simulator checks the MatterSim API's
+arguments, except the plain values of a batch of one, which :meth:`Batch.apply_one` takes as
+they come): it starts the elements' bodies, turns graph actions into body moves under the view
 rules (discretised or continuous), advances each element's clock by what its body reports,
 computes the collision signal along the body's track, renders the state through the frame
 pipeline and, when a film is set, frames during actions.
@@ -241,19 +242,34 @@ class Batch:
         if deferred:
             self._settle_all(deferred)
 
-    def apply_one(self, k: int, dh: float, de: float) -> None:
-        """``apply([(0, k, dh, de)])`` for a batch of one: the same rules without the loop.
+    def apply_one(self, indices: object, headings: object, elevations: object) -> bool:
+        """``makeAction``'s arguments for a batch of one, applied as :meth:`apply` would.
 
-        The hot path of agents stepping one element on its own clock with continuous views
-        (a discretised view or HA3D's shared clock takes :meth:`apply`).
+        The hot path of agents stepping one element on its own clock with continuous views,
+        with the values agents pass: one-entry lists of an int in range and finite floats.
+        Anything else (another batch size or type, a discretised view, HA3D's shared clock)
+        returns False, nothing changed, for the caller to check and :meth:`apply`.
         """
         cfg = self.cfg
         if cfg.revision != self._revision:
             self._prepare_step()
-        if cfg.discretized or not self._continuous:
-            self.apply([(0, k, dh, de)])
-            return
-        el = self.elements[0]
+        lists = type(indices) is list and type(headings) is list and type(elevations) is list
+        if not lists or cfg.discretized or not self._continuous:
+            return False
+        try:
+            (el,), (k,), (dh,), (de,) = self.elements, indices, headings, elevations
+        except ValueError:
+            return False
+        # A float is finite when x - x is 0 (inf - inf and NaN give NaN), with no call.
+        if not (
+            type(k) is int
+            and type(dh) is float
+            and type(de) is float
+            and dh - dh == 0.0
+            and de - de == 0.0
+            and 0 <= k < len(el.navigable)
+        ):
+            return False
         heading = _fmod(el.heading + dh, TWO_PI)  # as apply wraps and clamps, inlined
         if heading < 0.0:
             heading += TWO_PI
@@ -275,6 +291,7 @@ class Batch:
         else:
             contact = None
         self._settle(el, outcome, heading, elevation, 0, contact)
+        return True
 
     def robot(self, actions: Sequence[str]) -> None:
         """A robot action per element (``"stop"`` leaves it alone)."""

@@ -13,7 +13,9 @@ This runs on every action, so each viewpoint's neighbours are turned into plain 
 floats once, on first visit, sorted by bearing: a restricted query looks only at the
 neighbours whose bearing lies in the field of view (found by bisection, with a margin, then
 tested by the rule above), and the per-step work is a few ``math`` calls per visible
-neighbour. A table depends only on its graph, so simulators of one process share it (see
+neighbour. Where the package was installed with a C compiler at hand, that query runs
+compiled (``havln_mj.sim._navigable``) with the same arithmetic, float for float. A table
+depends only on its graph, so simulators of one process share it (see
 :mod:`havln_mj.sim.scenes`).
 """
 
@@ -25,6 +27,11 @@ from bisect import bisect_left, bisect_right
 
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.sim.state import ViewPoint, make
+
+try:  # the window query compiled (built where a C compiler was at hand): the same answers
+    from havln_mj.sim._navigable import window as _window
+except ImportError:
+    _window = None
 
 _PI = math.pi
 _cos, _hypot = math.cos, math.hypot
@@ -139,6 +146,10 @@ class NavTable:
             return self.direct(vp, heading, elevation, cos_half_hfov)
         # Restricted, the usual case: the bisected window holds only neighbours with a
         # bearing (never one straight above or below), most often none or one.
+        if _window is not None:
+            return _window(
+                node.bearings, node.ring, node.location, heading, elevation, c, w, ViewPoint
+            )
         b = node.bearings
         lo, hi = bisect_left(b, heading - w), bisect_right(b, heading + w)
         if lo == hi:

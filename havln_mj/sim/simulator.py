@@ -56,7 +56,6 @@ from havln_mj.scene.navgraph import NavGraph
 from havln_mj.sim.actions import (
     check_graph_steps,
     check_robot_action,
-    one_graph_step,
     per_element,
 )
 from havln_mj.sim.batch import WAIT_S, Batch, Element, FilmCallback
@@ -304,10 +303,7 @@ class Simulator(SimulatorSettings, SimulatorExtensions, SimulatorReports):
         batch = self._batch
         if batch is None or not batch.elements:
             self._running()  # raises
-        one = one_graph_step(batch.elements, index, heading, elevation)
-        if one is not None:  # a batch of one with plain values (hot)
-            batch.apply_one(*one)
-        else:
+        if not batch.apply_one(index, heading, elevation):  # a batch of one, plain values (hot)
             batch.apply(check_graph_steps(batch.elements, index, heading, elevation))
         self._timers["process"] += _now() - t0
 

@@ -7,8 +7,10 @@ import math
 import numpy as np
 import pytest
 
+from havln_mj.scene.connectivity import Connectivity
 from havln_mj.scene.navgraph import NavGraph
 from havln_mj.scene.scan import load_scan
+from havln_mj.sim import navigation
 from havln_mj.sim.navigation import NavTable, camera_positions
 
 
@@ -76,9 +78,19 @@ def _same(a: list, b: list) -> bool:
     ]
 
 
+@pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "python"])
 @pytest.mark.parametrize("discretized", [False, True])
-def test_the_bearing_window_gives_the_direct_rules_answer_bit_for_bit(shared_data, discretized):
-    """The bisected window's answer is the rule's loop over every neighbour, float for float."""
+def test_the_bearing_window_gives_the_direct_rules_answer_bit_for_bit(
+    shared_data, discretized, compiled, monkeypatch
+):
+    """The bisected window's answer is the rule's loop over every neighbour, float for float.
+
+    Both ways of answering it: the compiled query and its Python loop.
+    """
+    if compiled and navigation._window is None:
+        pytest.skip("the C extension havln_mj.sim._navigable is not built here")
+    if not compiled:
+        monkeypatch.setattr(navigation, "_window", None)
     rng = np.random.default_rng(2 + discretized)
     files = sorted((shared_data / "mp3d_connectivity").glob("*_connectivity.json"))[::6]
     graphs = [NavGraph.from_file(f) for f in files] + [load_scan("proc-0").graph]
@@ -98,3 +110,32 @@ def test_the_bearing_window_gives_the_direct_rules_answer_bit_for_bit(shared_dat
             assert _same(got, table.direct(vp, heading, elevation, cos_fov)), (vp, heading)
             views += len(got) - 1
     assert views > 2000
+
+
+@pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "python"])
+def test_a_hub_with_a_hundred_neighbours_in_view_keeps_the_rules_order(compiled, monkeypatch):
+    """Many neighbours in one window, some at equal angles (ties go by file order)."""
+    if compiled and navigation._window is None:
+        pytest.skip("the C extension havln_mj.sim._navigable is not built here")
+    if not compiled:
+        monkeypatch.setattr(navigation, "_window", None)
+    rng = np.random.default_rng(4)
+    n = 101
+    angles = np.repeat(rng.uniform(0.0, 2 * math.pi, 50), 2)[: n - 1]  # pairs at one bearing
+    radii = np.tile([1.0, 2.0], 50)[: n - 1]  # ... at two distances
+    poses = np.tile(np.eye(4), (n, 1, 1))
+    poses[1:, 0, 3], poses[1:, 1, 3] = radii * np.sin(angles), radii * np.cos(angles)
+    poses[1:, 2, 3] = rng.choice([0.0, 0.5], n - 1)
+    unob = np.zeros((n, n), bool)
+    unob[0, 1:] = unob[1:, 0] = True
+    ids = [f"v{k:03d}" for k in range(n)]
+    conn = Connectivity(ids, poses, [True] * n, ~np.eye(n, dtype=bool), unob, [1.5] * n)
+    graph = NavGraph(conn)
+    table = NavTable("hub", graph)
+    longest = 0
+    for heading in rng.uniform(0.0, 2 * math.pi, 50):
+        for cos_fov in (math.cos(1.2), math.cos(2.9)):
+            got = table.candidates("v000", float(heading), 0.1, cos_fov)
+            assert _same(got, table.direct("v000", float(heading), 0.1, cos_fov))
+            longest = max(longest, len(got) - 1)
+    assert longest > 64  # beyond the compiled query's stack buffer
