@@ -15,7 +15,8 @@ medians are compared. ``cpu_ratio`` compares steps per CPU second of the steppin
 holds steadier than wall time on a shared machine. ``same_path`` says whether both sides
 visited the same viewpoints on the plan's first pass. ``compiled_signal`` says whether ours
 ran the collision signal's compiled loop (``havln_mj.sim._closest``, built at install where a C
-compiler was at hand) or its numpy path.
+compiler was at hand) or its numpy path, ``compiled_navigation`` whether it ran the compiled
+navigable-location query (``havln_mj.sim._navigable``) or its Python loop.
 
 Workloads (rendering off; camera 640×480, vfov 60°, continuous headings, restricted
 navigation, identical on both sides):
@@ -215,9 +216,10 @@ def worker(args: argparse.Namespace) -> None:
     setup = time.perf_counter() - t0
     extra = {}
     if args.worker == "ours":
-        from havln_mj.sim import proximity
+        from havln_mj.sim import navigation, proximity
 
         extra["compiled_signal"] = getattr(proximity, "_closest", None) is not None
+        extra["compiled_navigation"] = getattr(navigation, "_window", None) is not None
     steps, wall, cpu, e = 0, 0.0, 0.0, 0
     while wall < args.seconds:
         w, c = _episode(sim, plan, e % PLAN_EPISODES, zeros, None)
@@ -286,8 +288,9 @@ def run_workload(name: str, args, tmp: Path, peer: Path | None) -> dict:
             "setup_s": round(statistics.median(r["setup_s"] for r in rows), 2),
             "rss_mb": round(max(r["rss_mb"] for r in rows), 1),
         }
-        if "compiled_signal" in rows[0]:  # ours: the collision signal's compiled loop ran
-            out[side]["compiled_signal"] = rows[0]["compiled_signal"]
+        for key in ("compiled_signal", "compiled_navigation"):  # ours: compiled code ran
+            if key in rows[0]:
+                out[side][key] = rows[0][key]
     crcs = {side: rows[0]["path_crc"] for side, rows in runs.items()}
     out["same_path"] = len(set(crcs.values())) == 1
     ratios = {}
