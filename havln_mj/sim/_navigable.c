@@ -117,13 +117,13 @@ static PyObject *window(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
         items[6] = PyFloat_FromDouble(rel_e);
         items[7] = PyTuple_GET_ITEM(row, 9);
         Py_INCREF(items[7]);
-        all[n].ix = PyLong_AsLong(items[1]);
-        all[n].rank = hypot(rel, rel_e);
         if (items[5] == NULL || items[6] == NULL) {
             for (i = 0; i < 8; ++i)
                 Py_XDECREF(items[i]);
             goto fail;
         }
+        all[n].ix = PyLong_AsLong(items[1]);
+        all[n].rank = hypot(rel, rel_e);
         if ((all[n].viewpoint = record(type, items, 8)) == NULL)
             goto fail;
         ++n;

@@ -78,19 +78,23 @@ def _same(a: list, b: list) -> bool:
     ]
 
 
-@pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "python"])
+@pytest.fixture(params=["compiled", "python"])
+def window_query(request, monkeypatch) -> None:
+    """Runs a test with the compiled window query, then with its Python loop."""
+    if request.param == "compiled" and navigation._window is None:
+        pytest.skip("the C extension havln_mj.sim._navigable is not built here")
+    if request.param == "python":
+        monkeypatch.setattr(navigation, "_window", None)
+
+
 @pytest.mark.parametrize("discretized", [False, True])
 def test_the_bearing_window_gives_the_direct_rules_answer_bit_for_bit(
-    shared_data, discretized, compiled, monkeypatch
+    shared_data, discretized, window_query
 ):
     """The bisected window's answer is the rule's loop over every neighbour, float for float.
 
     Both ways of answering it: the compiled query and its Python loop.
     """
-    if compiled and navigation._window is None:
-        pytest.skip("the C extension havln_mj.sim._navigable is not built here")
-    if not compiled:
-        monkeypatch.setattr(navigation, "_window", None)
     rng = np.random.default_rng(2 + discretized)
     files = sorted((shared_data / "mp3d_connectivity").glob("*_connectivity.json"))[::6]
     graphs = [NavGraph.from_file(f) for f in files] + [load_scan("proc-0").graph]
@@ -112,13 +116,8 @@ def test_the_bearing_window_gives_the_direct_rules_answer_bit_for_bit(
     assert views > 2000
 
 
-@pytest.mark.parametrize("compiled", [True, False], ids=["compiled", "python"])
-def test_a_hub_with_a_hundred_neighbours_in_view_keeps_the_rules_order(compiled, monkeypatch):
+def test_a_hub_with_a_hundred_neighbours_in_view_keeps_the_rules_order(window_query):
     """Many neighbours in one window, some at equal angles (ties go by file order)."""
-    if compiled and navigation._window is None:
-        pytest.skip("the C extension havln_mj.sim._navigable is not built here")
-    if not compiled:
-        monkeypatch.setattr(navigation, "_window", None)
     rng = np.random.default_rng(4)
     n = 101
     angles = np.repeat(rng.uniform(0.0, 2 * math.pi, 50), 2)[: n - 1]  # pairs at one bearing
