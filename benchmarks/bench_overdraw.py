@@ -4,7 +4,8 @@ Each procedural house is walked with rendering on (640×480 RGB-D by default, it
 drawn), and OpenGL's statistics queries count, per frame, the fragment-shader invocations
 (every fragment rasterised, hidden or not) and the samples that pass the depth test. Both are
 reported per pixel: 1.0 would mean each pixel is drawn once. On a CPU renderer (Mesa
-llvmpipe) a frame's time grows with the first, so this is what culling hidden rooms would cut.
+llvmpipe) a frame's time grows with the first. Rooms that walls hide from the camera are
+already left out (:mod:`havln_mj.render.culling`): this counts what is drawn after that.
 Also the frame rate of the same walk (queries included) and the GL renderer measured.
 
 Prints one JSON object. Run:

@@ -19,14 +19,16 @@ A renderer draws every geom it is given, in view or not, and a dressed person is
 of textured triangles: :meth:`PeoplePoser.hide_unseen` leaves out of the scene (alpha 0, which
 MuJoCo skips) what lies wholly outside a camera's view: each rigid piece whose bounding sphere
 does (a person half in view keeps only the pieces that may show), and each skinned person
-whose sphere around the pelvis does. :meth:`PeoplePoser.show_all` puts them back after the
-frame. The image does not change.
+whose sphere around the pelvis does, and, given the rooms the camera cannot see
+(:mod:`havln_mj.render.culling`), what lies wholly in them. :meth:`PeoplePoser.show_all` puts
+them back after the frame. The image does not change.
 """
 
 from __future__ import annotations
 
 import math
 import re
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -36,6 +38,9 @@ from havln_mj.humans.anny_mujoco import AnnySkinWriter
 from havln_mj.humans.crowd import Crowd
 from havln_mj.humans.mujoco_people import DRAW_STYLES, PeopleWriter, add_people
 from havln_mj.humans.skinned import SkinWriter
+
+Walled = Callable[[np.ndarray, np.ndarray], np.ndarray | None]
+"""Which spheres ``(centres (N, 3), radii (N,))`` lie wholly in rooms a camera cannot see."""
 
 
 class PeopleDrawing:
@@ -132,20 +137,30 @@ class PeoplePoser:
             changed += self._smpl.write(self.model, data, self.crowd.skin_vertices(t))
         return changed
 
-    def hide_unseen(self, data: mujoco.MjData, camera: int, aspect: float) -> bool:
+    def hide_unseen(
+        self, data: mujoco.MjData, camera: int, aspect: float, walled: Walled | None = None
+    ) -> bool:
         """Leaves out of the next frame what lies wholly outside camera ``camera``'s view.
 
         Call after :meth:`pose` and kinematics; ``aspect`` is the image's width / height.
-        Returns whether anything was left out (then call :meth:`show_all` after the frame).
+        ``walled`` says which spheres lie wholly in rooms the camera cannot see (None where
+        it cannot tell); what they hold is left out too. Returns whether anything was left
+        out (then call :meth:`show_all` after the frame).
         """
         if self._pelvis is None or not len(self._geoms):
             return False
         cam_pos, cam_rot = data.cam_xpos[camera], data.cam_xmat[camera].reshape(3, 3)
         tan_v = math.tan(math.radians(float(self.model.cam_fovy[camera])) / 2)
         view = (tan_v * aspect, tan_v)
-        outside = _outside(data.geom_xpos[self._geoms] - cam_pos, cam_rot, view, self._bound)
+        centres = data.geom_xpos[self._geoms]
+        outside = _outside(centres - cam_pos, cam_rot, view, self._bound)
+        behind = None if walled is None else walled(centres, self._bound)
+        if behind is not None:
+            outside |= behind
         if self._skinned.any():
             people = _outside(self._pelvis - cam_pos, cam_rot, view, self._radius)
+            if behind is not None:
+                people |= walled(self._pelvis, self._radius)
             outside = np.where(self._skinned, people[self._owner], outside)
         if not outside.any():
             return False

@@ -41,6 +41,7 @@ if TYPE_CHECKING:
     import trimesh
 
     from havln_mj.scene.mesh import MeshPart
+    from havln_mj.scene.rooms import RoomPlan
 
 log = logging.getLogger(__name__)
 
@@ -88,6 +89,13 @@ class Scan:
         from havln_mj.scene.mesh import load_mesh_parts  # trimesh: only when meshes are read
 
         return load_mesh_parts(self.mesh_path, up=str(self.meta.get("up", "z")))
+
+    @cached_property
+    def room_plan(self) -> RoomPlan | None:
+        """Its rooms and the portals between them, where it is one storey of rectangles."""
+        from havln_mj.scene.rooms import room_plan
+
+        return room_plan(self.regions, self.boxes)
 
     @cached_property
     def mesh(self) -> trimesh.Trimesh:

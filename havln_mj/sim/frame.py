@@ -24,6 +24,7 @@ import numpy as np
 
 from havln_mj import groups
 from havln_mj.errors import HavlnError, RenderingUnavailableError
+from havln_mj.scene.rooms import RoomPlan
 from havln_mj.sim.crowd import Crowd
 
 if TYPE_CHECKING:
@@ -90,15 +91,26 @@ class Frames:
             :class:`~havln_mj.humans.drawing.PeopleDrawing` adds them).
         crowd: The people in it, in the order they were added.
         style: How they were drawn (:data:`~havln_mj.humans.mujoco_people.DRAW_STYLES`).
+        rooms: The building's room plan, its visual geoms split by room
+            (:func:`~havln_mj.sim.world.visual_parts`): rooms a camera cannot see are left
+            out of its frames. None draws every room.
     """
 
-    def __init__(self, model: mujoco.MjModel, crowd: Crowd, style: str = "pieces") -> None:
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        crowd: Crowd,
+        style: str = "pieces",
+        rooms: RoomPlan | None = None,
+    ) -> None:
         self.model = model
         self.crowd = crowd
         # Drawing people and cameras: imported when a world is rendered, not with the simulator.
         from havln_mj.humans.drawing import PeopleDrawing
+        from havln_mj.render.culling import RoomCulling
 
         self._poser = PeopleDrawing(crowd, style).poser(model)
+        self._rooms = None if rooms is None else RoomCulling(model, rooms)
         self._human_geoms = model.geom_group == groups.HUMANS
         self._cameras: dict[str, tuple[Camera, ViewSettings]] = {}
         self._base_quat: dict[int, np.ndarray] = {}
@@ -203,12 +215,15 @@ class Frames:
             if settings.bgr:
                 rgb = np.ascontiguousarray(rgb[..., ::-1])
             depth = depth if settings.depth else None
-            hidden = False
+            hidden = culled = False
         else:
-            # People out of this camera's view are left out of its scene (the same image).
-            hidden = self._poser.hide_unseen(
-                data, self.model.camera(camera).id, settings.width / settings.height
-            )
+            # People out of this camera's view, and rooms it cannot see, are left out of its
+            # scene (the same image).
+            cam_id, aspect = self.model.camera(camera).id, settings.width / settings.height
+            rooms = self._rooms
+            culled = rooms is not None and rooms.hide_unseen(data, cam_id, settings.vfov, aspect)
+            walled = None if rooms is None else rooms.walled
+            hidden = self._poser.hide_unseen(data, cam_id, aspect, walled)
         try:
             if skybox is None:
                 frame = cam.render(data, rgb=True, depth=settings.depth, bgr=settings.bgr)
@@ -225,6 +240,8 @@ class Frames:
         finally:
             if hidden:
                 self._poser.show_all()
+            if culled:
+                self._rooms.show_all()
         return View(rgb, depth, mask if settings.human_mask else None, semantic, instance)
 
     def close(self) -> None:

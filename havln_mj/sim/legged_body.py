@@ -61,7 +61,9 @@ class LeggedKind:
         entry = self._worlds.get(scan_id)
         if entry is None:
             world = LeggedWorld(self._scan(scan_id), self._world_options, crowd, self.options)
-            frames = Frames(world.model, crowd, self._world_options.people_style)
+            frames = Frames(
+                world.model, crowd, self._world_options.people_style, world.scan.room_plan
+            )
             entry = self._worlds[scan_id] = (world, frames)
         return entry
 

@@ -53,7 +53,7 @@ class Stage:
             scan.__dict__.pop(loaded, None)
         self.skybox = _skybox_source(scan, skybox_root)
         self.data = mujoco.MjData(self.world.model)
-        self.frames = Frames(self.world.model, crowd, options.people_style)
+        self.frames = Frames(self.world.model, crowd, options.people_style, scan.room_plan)
         self.rig = PointBody(np.zeros(3))
         release_free_memory()  # what compiling the world allocated and freed
 

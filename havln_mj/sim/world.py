@@ -2,21 +2,24 @@
 
 Visual geometry is the scan's mesh, one mesh geom per look (texture, colour, finish; group
 ``VISUAL``, no contacts): a CPU renderer pays per geom drawn, so a building's parts are
-merged. Label geometry (group ``render.labels.LABELS``, hidden from cameras) holds one mesh
-per object instance of a scan that has labels, and people's geoms are labelled, for the
-segmentation pass (:mod:`havln_mj.render.labels`). Collision geometry (group ``COLLISION``,
-hidden from cameras) is the exact boxes of a procedural house, or the CoACD convex
-decomposition of the mesh for scans without boxes. Lighting is a soft headlight, a warm key
-light from above and a cool fill, all directional and without shadows: MuJoCo's renderer
-lights per vertex, so lamps would not pool on large faces, and each light or shadow map
-costs frame rate on a CPU. Windows and lamp shades glow by emission instead.
+merged. In a building with a room plan (:mod:`havln_mj.scene.rooms`) they are merged per
+look and room, so that frames leave out the rooms a camera cannot see
+(:mod:`havln_mj.render.culling`). Label geometry (group ``render.labels.LABELS``, hidden
+from cameras) holds one mesh per object instance of a scan that has labels, and people's
+geoms are labelled, for the segmentation pass (:mod:`havln_mj.render.labels`). Collision
+geometry (group ``COLLISION``, hidden from cameras) is the exact boxes of a procedural house,
+or the CoACD convex decomposition of the mesh for scans without boxes. Lighting is a soft
+headlight, a warm key light from above and a cool fill, all directional and without
+shadows: MuJoCo's renderer lights per vertex, so lamps would not pool on large faces, and
+each light or shadow map costs frame rate on a CPU. Windows and lamp shades glow by
+emission instead.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import mujoco
@@ -24,12 +27,14 @@ import numpy as np
 
 from havln_mj import groups
 from havln_mj.errors import InvalidArgumentError
+from havln_mj.render.culling import rooms_tag
 from havln_mj.render.labels import add_label_meshes, label_people
 from havln_mj.render.texels import REACH_M, resolved_density
 from havln_mj.robot.point_body import add_point_body
 from havln_mj.scene.collision import CoacdParams, decompose
 from havln_mj.scene.matterport.labelmesh import scan_label_meshes
-from havln_mj.scene.mesh import merge_by_look
+from havln_mj.scene.mesh import MeshPart, merge_by_look
+from havln_mj.scene.rooms import split_by_rooms
 from havln_mj.scene.scan import Scan, floor_heights
 from havln_mj.sim.visual import add_visual_parts, safe_name
 
@@ -205,6 +210,22 @@ def _add_hulls(spec: mujoco.MjSpec, scan: Scan, options: WorldOptions) -> int:
     return len(hulls)
 
 
+def visual_parts(scan: Scan) -> list[MeshPart]:
+    """The scan's visual parts: one per look, and per room where the scan has a room plan.
+
+    A part split by room carries its rooms in its name (:func:`~havln_mj.render.culling.rooms_tag`),
+    so a frame can leave out the rooms its camera cannot see.
+    """
+    parts = merge_by_look(scan.mesh_parts)
+    plan = scan.room_plan
+    if plan is None:
+        return parts
+    return [
+        replace(part, name=part.name + rooms_tag(rooms))
+        for rooms, part in split_by_rooms(parts, plan)
+    ]
+
+
 def world_spec(scan: Scan, options: WorldOptions | None = None) -> tuple[mujoco.MjSpec, str, int]:
     """The uncompiled world: building, lights and the point-body agent with its camera.
 
@@ -249,7 +270,7 @@ def world_spec(scan: Scan, options: WorldOptions | None = None) -> tuple[mujoco.
             specular=(0.0, 0.0, 0.0),
             castshadow=False,
         )
-    add_visual_parts(spec, merge_by_look(scan.mesh_parts), texel_limit=options.texel_limit())
+    add_visual_parts(spec, visual_parts(scan), texel_limit=options.texel_limit())
     if options.labels:
         add_label_meshes(spec, scan_label_meshes(scan))
     mode = options.collision

@@ -14,8 +14,8 @@ def _frames(monkeypatch, cull: bool) -> tuple[list, int]:
     hidden = []
     real = PeoplePoser.hide_unseen
 
-    def counting(self, data, camera, aspect):
-        out = real(self, data, camera, aspect) if cull else False
+    def counting(self, data, camera, aspect, walled=None):
+        out = real(self, data, camera, aspect, walled) if cull else False
         hidden.append(out)
         return out
 
@@ -58,8 +58,8 @@ def test_a_person_half_in_view_keeps_only_the_pieces_that_may_show(monkeypatch):
     halves = []
     real = PeoplePoser.hide_unseen
 
-    def watching(self, data, camera, aspect):
-        out = real(self, data, camera, aspect)
+    def watching(self, data, camera, aspect, walled=None):
+        out = real(self, data, camera, aspect, walled)
         shown = self.model.geom_rgba[self._geoms, 3] > 0
         for k in set(self._owner.tolist()):
             mine = shown[self._owner == k]
