@@ -112,6 +112,7 @@ class RoomPlan:
     def _search(
         self, room: int, wedge: Wedge, at: tuple[float, float], seen: np.ndarray, path: set
     ) -> None:
+        # A line of sight crosses each (convex) room once: paths without repeats suffice.
         seen[room] = True
         for portal in self.portals[room]:
             if portal.room in path:

@@ -94,6 +94,16 @@ def test_cameras_outside_the_rooms_or_the_storey_see_everything():
     assert plan.visible(np.array([4.02, 2.0, 1.5]), _facing(90.0)).all()
 
 
+def test_an_open_plan_of_many_rooms_is_searched_quickly():
+    # 6 × 5 rooms with no walls: paths between them are countless, wedges keep it short.
+    rects = [(3.0 * i, 3.0 * j, 3.0 * i + 3, 3.0 * j + 3) for i in range(6) for j in range(5)]
+    plan = room_plan(_regions(rects), _walls([]))
+    assert sum(len(p) for p in plan.portals) == 2 * (5 * 5 + 6 * 4)
+    assert plan.visible(np.array([1.5, 1.5, 1.5]), FULL).all()
+    ahead = plan.visible(np.array([1.5, 1.5, 1.5]), _facing(0.0, 5.0))  # along +x only
+    assert ahead.reshape(6, 5)[:, 0].all() and not ahead.reshape(6, 5)[:, 2:].any()
+
+
 def test_only_one_storey_of_rectangles_tiling_a_rectangle_has_a_plan():
     assert room_plan(_regions([(0, 0, 4, 4), (4, 0, 8, 4)], levels=2), WALL_WITH_DOOR) is None
     assert room_plan(_regions([(0, 0, 4, 4), (5, 0, 8, 4)]), WALL_WITH_DOOR) is None  # a gap
