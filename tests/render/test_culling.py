@@ -137,7 +137,7 @@ def test_frames_are_the_same_with_hidden_rooms_left_out(scene, style):
     whole = Frames(model, crowd, style)
     rooms = culled._rooms
     assert rooms.n_geoms > 0 and len(crowd.shapes) > 0
-    settings = ViewSettings(96, 72, math.radians(60), depth=True)
+    settings = ViewSettings(96, 72, math.radians(60), depth=True, human_mask=True)
     rng = np.random.default_rng(0)
     lo, hi = scan.room_plan.rects[:, :2].min(axis=0), scan.room_plan.rects[:, 2:].max(axis=0)
     rig = PointBody(np.zeros(3))
@@ -155,22 +155,29 @@ def test_frames_are_the_same_with_hidden_rooms_left_out(scene, style):
         return out
 
     rooms.hide_unseen, rooms.walled = hiding, walling
-    views = 30
+    views, seen_people = 30, 0
     for k in range(views):
-        if k % 2:  # anywhere in the house, looking anywhere
+        t = 4.0 * k
+        heading = rng.uniform(0.0, 2 * math.pi)
+        if k % 3 == 1:  # anywhere in the house, looking anywhere
             at = np.array([*rng.uniform(lo, hi), rng.uniform(0.2, 2.7)])
+        elif k % 3 == 2:  # 1.5 m from someone, facing them
+            pelvis = crowd.pose(t)[0][k % len(crowd.shapes), 0]
+            at = pelvis + np.array([1.5 * math.sin(heading), 1.5 * math.cos(heading), 0.4])
+            heading += math.pi
         else:  # near a viewpoint
             at = np.array(scan.graph.position(scan.graph.nodes[k % scan.graph.num_nodes]))
             at[:2] += rng.normal(0.0, 0.3, 2)
-        rig.set_pose(at, rng.uniform(0.0, 2 * math.pi), rng.uniform(-1.2, 1.2))
+        rig.set_pose(at, heading, rng.uniform(-0.6, 0.6) if k % 3 == 2 else rng.uniform(-1.2, 1.2))
         rig.write(model, data)
-        t = 4.0 * k
         a = culled.render(data, t, "agent_cam", settings)
         b = whole.render(data, t, "agent_cam", settings)
         np.testing.assert_array_equal(a.rgb, b.rgb)
         np.testing.assert_array_equal(a.depth, b.depth)
+        np.testing.assert_array_equal(a.human_mask, b.human_mask)
+        seen_people += int(b.human_mask.any())
     # Most views have a room behind a wall, and some have someone in it.
-    assert counts["rooms"] >= views // 2 and counts["people"] > 0
+    assert counts["rooms"] >= views // 2 and counts["people"] > 0 and seen_people > 0
     # Afterwards every geom is drawn again.
     np.testing.assert_array_equal(model.geom_rgba[rooms._ids, 3], rooms._alpha)
     culled.close()
