@@ -247,10 +247,17 @@ def split_by_rooms(parts: list[MeshPart], plan: RoomPlan) -> list[tuple[tuple[in
         np.minimum.at(lo, label, verts[:, :2])
         np.maximum.at(hi, label, verts[:, :2])
         meets = plan.rooms_meeting(lo, hi)[label[part.faces[:, 0]]]  # per face
-        keys, face_key = np.unique(meets, axis=0, return_inverse=True)
-        for k, key in enumerate(keys):
-            rooms = tuple(np.flatnonzero(key).tolist())
-            out.append((rooms, _sub_part(part, np.flatnonzero(face_key.ravel() == k))))
+        if not len(meets):
+            continue
+        # Faces grouped by their rooms: sorted rows, cut where a row changes. (np.unique's
+        # rows go through a structured dtype, whose comparison turns a Ctrl-C into a
+        # TypeError.)
+        order = np.lexsort(meets.T[::-1])
+        rows = meets[order]
+        change = np.flatnonzero(np.any(rows[1:] != rows[:-1], axis=1)) + 1
+        for faces in np.split(order, change):
+            rooms = tuple(np.flatnonzero(meets[faces[0]]).tolist())
+            out.append((rooms, _sub_part(part, np.sort(faces))))
     return out
 
 
