@@ -92,6 +92,23 @@ class BoxSet:
         return cls(lo, hi, kind, material, rgba)
 
 
+def interval_gaps(
+    lo: float, hi: float, covers: list[tuple[float, float]], shortest: float = 1e-6
+) -> list[tuple[float, float]]:
+    """The stretches of [lo, hi] that no interval of ``covers`` covers, longer than ``shortest``.
+
+    Along one line: the wall left beside a room's doors, the openings left between walls.
+    """
+    out, start = [], lo
+    for a, b in sorted(covers):
+        if a > start:
+            out.append((start, min(a, hi)))
+        start = max(start, b)
+    if hi > start:
+        out.append((start, hi))
+    return [(a, b) for a, b in out if b - a > shortest]
+
+
 def segments_hit_boxes(
     p0: np.ndarray, p1: np.ndarray, lo: np.ndarray, hi: np.ndarray, chunk: int = 4096
 ) -> np.ndarray:

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from havln_mj.scene.boxes import BoxSet
+from havln_mj.scene.boxes import BoxSet, interval_gaps
 from havln_mj.scene.mesh import MeshPart
 from havln_mj.scene.regions import Regions
 
@@ -212,21 +212,12 @@ def _shared_edges(rects: np.ndarray):
 def _open_stretches(walls, axis: int, at: float, lo: float, hi: float) -> list[tuple[float, float]]:
     """The stretches of ``lo``–``hi`` on the line ``coord[axis] == at`` no wall covers."""
     other = 1 - axis
-    covered = sorted(
-        (max(lo, w_lo[other]), min(hi, w_hi[other]))
+    covers = [
+        (w_lo[other], w_hi[other])
         for w_lo, w_hi in walls
         if w_lo[axis] - EDGE_TOL_M <= at <= w_hi[axis] + EDGE_TOL_M
-        and w_hi[other] > lo
-        and w_lo[other] < hi
-    )
-    stretches, start = [], lo
-    for s, e in covered:
-        if s > start + EDGE_TOL_M:
-            stretches.append((start, s))
-        start = max(start, e)
-    if hi > start + EDGE_TOL_M:
-        stretches.append((start, hi))
-    return stretches
+    ]
+    return interval_gaps(lo, hi, covers, EDGE_TOL_M)
 
 
 def split_by_rooms(parts: list[MeshPart], plan: RoomPlan) -> list[tuple[tuple[int, ...], MeshPart]]:

@@ -8,6 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from havln_mj.frames import camera_quat
 from havln_mj.render.culling import RoomCulling, rooms_tag, view_wedge
 from havln_mj.robot.point_body import PointBody
 from havln_mj.scene.boxes import BoxSet
@@ -21,8 +22,6 @@ from havln_mj.tasks.procedural import scene_crowd
 
 def _xmat(heading: float, elevation: float) -> np.ndarray:
     """The camera orientation the point body gives (heading 0 faces +y, turning right)."""
-    from havln_mj.frames import camera_quat
-
     mat = np.zeros(9)
     mujoco.mju_quat2Mat(mat, camera_quat(heading, elevation))
     return mat
@@ -99,8 +98,6 @@ def test_walled_spheres_are_those_wholly_in_unseen_rooms():
     data = mujoco.MjData(model)
     culling = RoomCulling(model, plan)
     assert culling.n_geoms == 2
-    from havln_mj.frames import camera_quat
-
     data.mocap_pos[0] = (2.0, 0.5, 1.5)  # in room 0, facing the wall beside the door (+x)
     data.mocap_quat[0] = camera_quat(math.pi / 2, 0.0)
     mujoco.mj_kinematics(model, data)

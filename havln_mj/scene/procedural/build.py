@@ -4,24 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from havln_mj.scene.boxes import BoxSet
+from havln_mj.scene.boxes import BoxSet, interval_gaps
 from havln_mj.scene.procedural.furnish import Item
 from havln_mj.scene.procedural.layout import FloorPlan, Room
 from havln_mj.scene.procedural.recipe import Recipe
 
 SLAB = 0.1  # floor and ceiling thickness
-
-
-def _subtract(lo: float, hi: float, holes: list[tuple[float, float]]) -> list[tuple[float, float]]:
-    """The parts of [lo, hi] outside the given intervals."""
-    out, start = [], lo
-    for a, b in sorted(holes):
-        if a > start:
-            out.append((start, min(a, hi)))
-        start = max(start, b)
-    if hi > start:
-        out.append((start, hi))
-    return [(a, b) for a, b in out if b - a > 1e-6]
 
 
 def _wall_box(
@@ -62,7 +50,7 @@ def room_walls(room: Room, plan: FloorPlan, recipe: Recipe) -> list[tuple[np.nda
         t = thick[side]
         n0, n1 = (coord, coord + t) if side in ("south", "west") else (coord - t, coord)
 
-        for a, b in _subtract(lo, hi, [(h[0], h[1]) for h in holes]):
+        for a, b in interval_gaps(lo, hi, [(h[0], h[1]) for h in holes]):
             boxes.append(_wall_box(vertical, n0, n1, a, b, 0.0, height))
         for a, b, door_h in holes:
             boxes.append(_wall_box(vertical, n0, n1, max(a, lo), min(b, hi), door_h, height))
